@@ -1,0 +1,427 @@
+"""The Interaction Tensor: fit from one example, save and load without pickle, pose helpers.
+
+Training data flow (paper, section 3):
+example geometry -> surface samples -> bisector surface -> provenance vectors and weights ->
+keypoints -> descriptor file.
+"""
+
+from __future__ import annotations
+
+import io as _io
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from . import __version__
+from .bisector import bisector_points, trim_to_sphere
+from .errors import InputError
+from .io import Geometry, atomic_path, validate_geometry
+from .sampling import (mean_spacing, mesh_area, sample_mesh, uniform_keypoints,
+                       weighted_keypoints, estimate_normals)
+from .scoring import surface_vectors
+from .settings import TrainSettings
+
+FORMAT = "interaction-tensor-descriptor"
+FORMAT_VERSION = 1
+#: Scene-object normals within this angle of the N_aff line may hold the reference point.
+REFERENCE_NORMAL_DEG = 30.0
+
+
+@dataclass
+class Keypoints:
+    """One set of affordance keypoints, sorted by |provenance| ascending (weight descending).
+
+    Attributes
+    ----------
+    points : (N, 3) float64 keypoint positions, training frame, metres
+    provenance : (N, 3) float64 provenance vectors (keypoint -> nearest scene-object point)
+    weights : (N,) float64 weights in [0, 1] (eq. 4)
+    """
+
+    points: np.ndarray
+    provenance: np.ndarray
+    weights: np.ndarray
+
+
+@dataclass
+class InteractionTensor:
+    """A single-example affordance descriptor.
+
+    Every position is in the training frame (the frame of the example files, metres, +Z up).
+    A prediction at test point ``t`` and orientation angle ``a`` poses the query object with
+    ``x -> Rz(a) (x - reference_point) + t`` (:meth:`pose`).
+
+    Attributes
+    ----------
+    affordance : name, e.g. ``placing-bowl``
+    reference_point : (3,) p_scene, the centre of the scene-object's contact region
+    affordance_normal : (3,) unit N_aff
+    radius : RAD = d_o, the query object's bounding-box diagonal (m)
+    query_centroid : (3,) centre of the trimming sphere
+    bisector_points, provenance_vectors : (M, 3) the whole trimmed tensor field
+    weights : (M,) in [0, 1]
+    weighted, uniform : the two keypoint sets
+    query_vertices, query_faces : the query object as given (faces (0, 3) for a cloud)
+    contact_points : (C, 3) query samples that touch the scene-object in the example
+    scene_points : (S, 3) scene-object samples used for the Voronoi step (subsampled)
+    scene_spacing : spacing (m) of the scene-object samples; detection samples at it
+    vectors : ``surface`` or ``points``, how provenance (and test) vectors are measured
+    thresholds : calibrated acceptance thresholds, key ``"<criterion>-<keypoint set>"``
+    self_scores : score of the example on a re-sampled scene-object, same keys
+    meta : settings, sources, timings, versions
+    """
+
+    affordance: str
+    reference_point: np.ndarray
+    affordance_normal: np.ndarray
+    radius: float
+    query_centroid: np.ndarray
+    bisector_points: np.ndarray
+    provenance_vectors: np.ndarray
+    weights: np.ndarray
+    weighted: Keypoints
+    uniform: Keypoints
+    query_vertices: np.ndarray
+    query_faces: np.ndarray
+    contact_points: np.ndarray
+    scene_points: np.ndarray
+    scene_spacing: float
+    vectors: str = "surface"
+    thresholds: dict = field(default_factory=dict)
+    self_scores: dict = field(default_factory=dict)
+    meta: dict = field(default_factory=dict)
+
+    # ------------------------------------------------------------------ helpers
+    def keypoints(self, which: str = "weighted") -> Keypoints:
+        """The ``weighted`` or ``uniform`` keypoint set."""
+        if which not in ("weighted", "uniform"):
+            raise ValueError(f"unknown keypoint set {which!r}")
+        return getattr(self, which)
+
+    def threshold(self, criterion: str = "paper", which: str = "weighted") -> float:
+        """Default acceptance threshold for a criterion and keypoint set."""
+        return float(self.thresholds[f"{criterion}-{which}"])
+
+    def pose(self, position, angle: float) -> np.ndarray:
+        """4x4 pose taking the training-frame query object to ``position`` at ``angle``."""
+        c, s = np.cos(angle), np.sin(angle)
+        rot = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+        m = np.eye(4)
+        m[:3, :3] = rot
+        m[:3, 3] = np.asarray(position, float) - rot @ self.reference_point
+        return m
+
+    @property
+    def query_is_mesh(self) -> bool:
+        return len(self.query_faces) > 0
+
+    # ------------------------------------------------------------------ training
+    @classmethod
+    def fit(cls, query: Geometry, scene_object: Geometry, affordance: str = "interaction",
+            settings: TrainSettings | None = None, reference_point=None,
+            progress=None) -> "InteractionTensor":
+        """Fit the Interaction Tensor of one example.
+
+        Parameters
+        ----------
+        query : the query object, posed in the interaction (mesh or point cloud)
+        scene_object : the scene-object in the same frame (mesh or point cloud)
+        affordance : a name for the interaction
+        settings : :class:`TrainSettings` (defaults if None)
+        reference_point : (3,) override of p_scene; default: centre of the contact region
+        progress : optional callable(str) told the name of each step
+        """
+        settings = settings or TrainSettings()
+        say = progress or (lambda _msg: None)
+        validate_geometry(query, min_points=4)
+        validate_geometry(scene_object, min_points=4)
+        timings = {}
+        t0 = time.perf_counter()
+        normal = np.asarray(settings.affordance_normal, float)
+        normal /= np.linalg.norm(normal)
+
+        # 1. samples --------------------------------------------------------------
+        say("sampling")
+        if query.is_mesh:
+            q_pts, _ = sample_mesh(query, settings.query_points, settings.seed)
+        else:
+            q_pts = query.vertices
+        radius = float(np.linalg.norm(np.ptp(query.vertices, axis=0)))
+        centre = q_pts.mean(axis=0)
+        crop = settings.crop_factor * radius
+        s_pts, s_nrm = _scene_object_samples(scene_object, centre, crop,
+                                             settings.scene_spacing, settings.seed + 1)
+        if len(s_pts) < 4:
+            raise InputError(scene_object.source,
+                             f"no scene-object surface within {crop:.3f} m of the query object: "
+                             "the objects do not touch or interact")
+        gap_tree = cKDTree(s_pts)
+        gaps, _ = gap_tree.query(q_pts, workers=-1)
+        if gaps.min() > radius:
+            raise InputError(scene_object.source,
+                             f"the objects do not touch: the scene-object is {gaps.min():.3f} m "
+                             f"from the query object, more than its size {radius:.3f} m")
+        timings["sampling"] = time.perf_counter() - t0
+
+        # 2. bisector surface and 3. provenance vectors, weights -----------------------
+        say("bisector")
+        t1 = time.perf_counter()
+        bis = bisector_points(q_pts, s_pts, seed=settings.seed)
+        bis = bis[trim_to_sphere(bis, centre, radius)]
+        dist, nn = gap_tree.query(bis, workers=-1)
+        # keep points whose empty sphere lies inside the crop ball: exact, see settings
+        exact = np.linalg.norm(bis - centre, axis=1) + dist <= crop
+        bis, nn = bis[exact], nn[exact]
+        prov = surface_vectors(bis, s_pts, s_nrm, nn, settings.scene_spacing, settings.vectors)
+        if len(bis) < 8:
+            raise InputError(scene_object.source,
+                             f"only {len(bis)} bisector points near the query object: the "
+                             "objects do not interact (too far apart or too coarse sampling)")
+        mag = np.linalg.norm(prov, axis=1)
+        span = mag.max() - mag.min()
+        weights = 1.0 - (mag - mag.min()) / span if span > 0 else np.ones_like(mag)
+        timings["bisector"] = time.perf_counter() - t1
+
+        # 4. keypoints --------------------------------------------------------------
+        say("keypoints")
+        t2 = time.perf_counter()
+        n = settings.n_keypoints
+        sets = {}
+        for name, idx in (
+                ("weighted", weighted_keypoints(weights, n, settings.seed + 2)),
+                ("uniform", uniform_keypoints(len(bis), n, settings.seed + 3))):
+            idx = idx[np.lexsort((idx, mag[idx]))]   # |v| ascending
+            sets[name] = Keypoints(bis[idx], prov[idx], weights[idx])
+        timings["keypoints"] = time.perf_counter() - t2
+
+        # 5. reference point, contact ---------------------------------------------------
+        ref, contact = _reference_point(q_pts, gaps, s_pts, s_nrm, normal,
+                                        settings.contact_tolerance, settings.scene_spacing)
+        if reference_point is not None:
+            ref = np.asarray(reference_point, dtype=float).reshape(3)
+
+        # keep the query object itself for posing (clouds subsampled to 30k points)
+        qv, qf = query.vertices, (query.faces if query.is_mesh else np.zeros((0, 3), np.int64))
+        if not query.is_mesh and len(qv) > 30000:
+            qv = qv[np.random.default_rng(settings.seed).choice(len(qv), 30000, replace=False)]
+        keep_scene = s_pts
+        if len(keep_scene) > 30000:
+            keep_scene = s_pts[np.random.default_rng(settings.seed).choice(len(s_pts), 30000,
+                                                                            replace=False)]
+        tensor = cls(
+            affordance=str(affordance), reference_point=ref, affordance_normal=normal,
+            radius=radius, query_centroid=centre, bisector_points=bis,
+            provenance_vectors=prov, weights=weights, weighted=sets["weighted"],
+            uniform=sets["uniform"], query_vertices=np.asarray(qv, float),
+            query_faces=np.asarray(qf, np.int64), contact_points=contact,
+            scene_points=keep_scene, scene_spacing=float(settings.scene_spacing),
+            vectors=settings.vectors)
+
+        # 6. calibration: the example scored against a re-sampled copy of itself ----------
+        say("calibration")
+        t3 = time.perf_counter()
+        tensor._calibrate(scene_object, settings)
+        timings["calibration"] = time.perf_counter() - t3
+        timings["total"] = time.perf_counter() - t0
+        tensor.meta = {
+            "settings": settings.to_dict(),
+            "query_source": query.source, "scene_object_source": scene_object.source,
+            "query_samples": int(len(q_pts)), "scene_object_samples": int(len(s_pts)),
+            "bisector_points": int(len(bis)), "min_gap": float(gaps.min()),
+            "timings_s": {k: round(v, 4) for k, v in timings.items()},
+            "created_with": f"interaction-tensor {__version__}",
+        }
+        return tensor
+
+    def _calibrate(self, scene_object: Geometry, settings: TrainSettings) -> None:
+        from .detect import score_at
+        from .scene import Scene
+
+        crop = settings.crop_factor * self.radius
+        pts, nrm = _scene_object_samples(scene_object, self.query_centroid, crop,
+                                         self.scene_spacing, settings.seed + 101)
+        scene = Scene(pts, nrm, self.scene_spacing, "calibration", True)
+        # test points: the re-sampled points nearest the reference point
+        k = min(9, len(pts))
+        _, near = scene.tree.query(self.reference_point, k=k)
+        positions = pts[np.atleast_1d(near)]
+        for criterion in ("paper", "gaussian"):
+            for which in ("weighted", "uniform"):
+                s = score_at(self, scene, positions, np.zeros(len(positions), int),
+                             criterion=criterion, keypoints=which)
+                key = f"{criterion}-{which}"
+                self.self_scores[key] = float(np.median(s))
+                self.thresholds[key] = (float(settings.calibration_ratio * np.median(s))
+                                        if criterion == "paper" else 0.5)
+
+    # ------------------------------------------------------------------ files
+    def save(self, path) -> Path:
+        """Write the descriptor as one ``.npz`` (no pickle) with JSON metadata, atomically."""
+        path = Path(path)
+        header = {
+            "format": FORMAT, "format_version": FORMAT_VERSION, "affordance": self.affordance,
+            "radius": self.radius, "scene_spacing": self.scene_spacing, "vectors": self.vectors,
+            "thresholds": self.thresholds, "self_scores": self.self_scores, "meta": self.meta,
+        }
+        arrays = {
+            "header": np.frombuffer(json.dumps(header).encode("utf-8"), dtype=np.uint8),
+            "reference_point": self.reference_point, "affordance_normal": self.affordance_normal,
+            "query_centroid": self.query_centroid, "bisector_points": self.bisector_points,
+            "provenance_vectors": self.provenance_vectors, "weights": self.weights,
+            "query_vertices": self.query_vertices, "query_faces": self.query_faces,
+            "contact_points": self.contact_points, "scene_points": self.scene_points,
+        }
+        for name in ("weighted", "uniform"):
+            kp = self.keypoints(name)
+            arrays[f"{name}_points"] = kp.points
+            arrays[f"{name}_provenance"] = kp.provenance
+            arrays[f"{name}_weights"] = kp.weights
+        buf = _io.BytesIO()
+        np.savez_compressed(buf, **arrays)
+        with atomic_path(path) as tmp:
+            tmp.write_bytes(buf.getvalue())
+        return path
+
+    @classmethod
+    def load(cls, path) -> "InteractionTensor":
+        """Read a descriptor written by :meth:`save`; never executes code (no pickle)."""
+        path = Path(path)
+        if not path.exists():
+            raise InputError(path, "no such descriptor file")
+        if path.is_dir():
+            raise InputError(path, "is a directory, expected a descriptor (.npz) file")
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                arrays = {k: data[k] for k in data.files}
+        except Exception as exc:
+            raise InputError(path, f"not a descriptor file ({type(exc).__name__}: {exc})") from None
+        try:
+            header = json.loads(arrays.pop("header").tobytes().decode("utf-8"))
+        except Exception:
+            raise InputError(path, "not a descriptor file (no readable header)") from None
+        if header.get("format") != FORMAT:
+            raise InputError(path, "not an interaction-tensor descriptor")
+        if header.get("format_version") != FORMAT_VERSION:
+            raise InputError(path, f"descriptor format version {header.get('format_version')} "
+                                   f"is not supported (this version reads {FORMAT_VERSION})")
+        try:
+            sets = {name: Keypoints(arrays[f"{name}_points"], arrays[f"{name}_provenance"],
+                                    arrays[f"{name}_weights"]) for name in ("weighted", "uniform")}
+            tensor = cls(
+                affordance=header["affordance"], reference_point=arrays["reference_point"],
+                affordance_normal=arrays["affordance_normal"], radius=float(header["radius"]),
+                query_centroid=arrays["query_centroid"], bisector_points=arrays["bisector_points"],
+                provenance_vectors=arrays["provenance_vectors"], weights=arrays["weights"],
+                weighted=sets["weighted"], uniform=sets["uniform"],
+                query_vertices=arrays["query_vertices"], query_faces=arrays["query_faces"],
+                contact_points=arrays["contact_points"], scene_points=arrays["scene_points"],
+                scene_spacing=float(header["scene_spacing"]), vectors=header["vectors"],
+                thresholds=header["thresholds"],
+                self_scores=header["self_scores"], meta=header.get("meta", {}))
+        except KeyError as exc:
+            raise InputError(path, f"descriptor is missing {exc.args[0]!r}") from None
+        if tensor.weighted.points.shape != tensor.weighted.provenance.shape:
+            raise InputError(path, "descriptor arrays have inconsistent shapes")
+        return tensor
+
+    def summary(self) -> dict:
+        """A JSON-able summary of what the descriptor holds (for ``itensor info``)."""
+        def stats(kp: Keypoints):
+            m = np.linalg.norm(kp.provenance, axis=1)
+            return {"count": int(len(kp.points)), "min_|v|": float(m.min()),
+                    "max_|v|": float(m.max()), "mean_weight": float(kp.weights.mean())}
+        return {
+            "affordance": self.affordance,
+            "format": f"{FORMAT} v{FORMAT_VERSION}",
+            "reference_point": [round(float(v), 5) for v in self.reference_point],
+            "affordance_normal": [round(float(v), 4) for v in self.affordance_normal],
+            "radius_d_o": round(self.radius, 5),
+            "scene_spacing": self.scene_spacing, "vectors": self.vectors,
+            "bisector_points": int(len(self.bisector_points)),
+            "keypoints": {"weighted": stats(self.weighted), "uniform": stats(self.uniform)},
+            "query_object": {"vertices": int(len(self.query_vertices)),
+                             "faces": int(len(self.query_faces))},
+            "contact_points": int(len(self.contact_points)),
+            "thresholds": self.thresholds, "self_scores": self.self_scores,
+            "meta": self.meta,
+        }
+
+
+def _scene_object_samples(scene_object: Geometry, centre, crop: float, spacing: float, seed):
+    """Scene-object samples (and unit normals) within ``crop`` m of ``centre``.
+
+    Meshes: faces that reach the ball are sampled at ``spacing``; clouds denser than
+    ``spacing`` are thinned by a seeded random subset; normals of clouds are estimated.
+    """
+    import trimesh
+
+    if scene_object.is_mesh:
+        tri = scene_object.vertices[scene_object.faces]
+        closest = trimesh.triangles.closest_point(tri, np.tile(centre, (len(tri), 1)))
+        mask = np.linalg.norm(closest - centre, axis=1) <= crop
+        if not mask.any():
+            return np.zeros((0, 3)), np.zeros((0, 3))
+        area = mesh_area(Geometry(scene_object.vertices, scene_object.faces[mask]))
+        count = int(np.clip(round(area / spacing ** 2), 100, 3_000_000))
+        pts, nrm = sample_mesh(scene_object, count, seed, face_mask=mask)
+    else:
+        pts = scene_object.vertices
+        tree = cKDTree(pts)
+        nrm = scene_object.normals
+        if nrm is None:
+            nrm = estimate_normals(pts, tree=tree)
+        s = mean_spacing(pts, tree)
+        keep = np.linalg.norm(pts - centre, axis=1) <= crop * 1.2
+        pts, nrm = pts[keep], nrm[keep]
+        frac = min(1.0, (s / spacing) ** 2)
+        if frac < 1.0 and len(pts):
+            rng = np.random.default_rng(seed)
+            sub = rng.random(len(pts)) < frac
+            pts, nrm = pts[sub], nrm[sub]
+    inside = np.linalg.norm(pts - centre, axis=1) <= crop
+    return pts[inside], nrm[inside]
+
+
+def _reference_point(q_pts, q_gaps, s_pts, s_nrm, normal, tolerance, spacing):
+    """p_scene: centre of the scene-object's contact patch facing the query along N_aff.
+
+    Candidates are scene-object samples whose normal line is within 30 degrees of N_aff and
+    whose nearest query sample lies on the N_aff side of them. The patch is every candidate
+    within ``tolerance`` of the smallest such gap that is connected (links of 2.5 spacings)
+    to the closest one.
+
+    Returns the reference point (3,) and the query's contact samples (C, 3).
+    """
+    cos_lim = np.cos(np.radians(REFERENCE_NORMAL_DEG))
+    aligned = np.abs(s_nrm @ normal) >= cos_lim
+    q_tree = cKDTree(q_pts)
+    d, qi = q_tree.query(s_pts, k=min(8, len(q_pts)), workers=-1)
+    # the query lies on the N_aff side of a point when its 8 nearest query samples do on
+    # average (a touching contact has its nearest sample beside it, not above it); where
+    # they are level with it (a flat bottom resting on the surface), when its centroid does
+    local = ((q_pts[qi] - s_pts[:, None, :]) @ normal).mean(axis=1)
+    level = 0.1 * spacing
+    facing = (local > level) | ((local > -level) & ((q_pts.mean(axis=0) - s_pts) @ normal > 0))
+    d = d[:, 0]
+    cand = np.flatnonzero(aligned & facing)
+    if len(cand) == 0:
+        cand = np.flatnonzero(facing) if facing.any() else np.arange(len(s_pts))
+    best = cand[np.argmin(d[cand])]
+    patch = cand[d[cand] <= d[best] + tolerance]
+    # keep the connected piece of the patch that holds the closest point (a seat, not the
+    # foot rests as well)
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    pairs = cKDTree(s_pts[patch]).query_pairs(2.5 * spacing, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
+                       shape=(len(patch), len(patch)))
+    _, label = connected_components(graph, directed=False)
+    patch = patch[label == label[np.flatnonzero(patch == best)[0]]]
+    ref = s_pts[patch].mean(axis=0)
+    contact = q_pts[q_gaps <= q_gaps.min() + tolerance]
+    return ref, contact

@@ -1,0 +1,108 @@
+"""Area-uniform surface sampling, point-cloud normals and keypoint sampling."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .errors import InputError
+from .io import Geometry
+
+
+def mesh_area(geometry: Geometry) -> float:
+    """Surface area (m^2) of a mesh geometry."""
+    import trimesh
+
+    return float(trimesh.triangles.area(geometry.vertices[geometry.faces]).sum())
+
+
+def sample_mesh(geometry: Geometry, count: int, seed, face_mask=None):
+    """Area-uniform random samples on a mesh, with their face normals.
+
+    Parameters
+    ----------
+    geometry : a mesh Geometry
+    count : number of samples
+    seed : int or numpy Generator
+    face_mask : (F,) bool or None, restrict sampling to these faces
+
+    Returns
+    -------
+    points : (count, 3) float64, metres
+    normals : (count, 3) float64, unit face normals (orientation as the file's winding)
+    """
+    import trimesh
+
+    faces = geometry.faces if face_mask is None else geometry.faces[face_mask]
+    if len(faces) == 0 or not trimesh.triangles.area(geometry.vertices[faces]).sum() > 0:
+        raise InputError(geometry.source, "no surface to sample (zero area)")
+    mesh = trimesh.Trimesh(geometry.vertices, faces, process=False)
+    points, face_index = trimesh.sample.sample_surface(mesh, int(count), seed=seed)
+    normals = np.asarray(mesh.face_normals)[face_index]
+    return points, normals
+
+
+def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = None) -> np.ndarray:
+    """Unit normals of a point cloud by PCA of the ``k`` nearest neighbours.
+
+    The sign is chosen so that normals point to +Z where they are not horizontal
+    (normals of clouds are unoriented; callers that need a side use their own rule).
+
+    Returns (N, 3) float64.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    k = int(min(k, len(points)))
+    tree = cKDTree(points) if tree is None else tree
+    normals = np.empty_like(points)
+    step = 200_000  # bounds the (step, k, 3) neighbourhood array
+    for start in range(0, len(points), step):
+        sl = slice(start, start + step)
+        _, idx = tree.query(points[sl], k=k, workers=-1)
+        nb = points[idx] - points[idx].mean(axis=1, keepdims=True)
+        cov = np.einsum("nki,nkj->nij", nb, nb)
+        _, vecs = np.linalg.eigh(cov)
+        normals[sl] = vecs[:, :, 0]
+    flip = normals[:, 2] < 0
+    normals[flip] *= -1
+    return normals
+
+
+def mean_spacing(points: np.ndarray, tree: cKDTree | None = None, sample: int = 20000,
+                 seed: int = 0) -> float:
+    """Median distance (m) from a point to its nearest distinct neighbour, on a random subset.
+
+    Duplicated points (common in scans and converted clouds) are skipped.
+    """
+    tree = cKDTree(points) if tree is None else tree
+    rng = np.random.default_rng(seed)
+    idx = rng.choice(len(points), size=min(sample, len(points)), replace=False)
+    k = min(8, len(points))
+    d, _ = tree.query(points[idx], k=k, workers=-1)
+    d = np.where(d > 1e-9, d, np.inf).min(axis=1)
+    d = d[np.isfinite(d)]
+    return float(np.median(d)) if len(d) else 0.0
+
+
+def weighted_keypoints(weights: np.ndarray, n: int, seed) -> np.ndarray:
+    """Weight-driven keypoint indices: ``n`` draws without replacement with probability
+    proportional to ``weights`` (paper, eq. 3).
+
+    Points of zero weight are drawn only when fewer than ``n`` have a positive weight.
+    Returns (min(n, len(weights)),) int64 indices, unsorted.
+    """
+    weights = np.asarray(weights, dtype=np.float64)
+    n = min(int(n), len(weights))
+    rng = np.random.default_rng(seed)
+    positive = np.flatnonzero(weights > 0)
+    if len(positive) <= n:
+        rest = np.setdiff1d(np.arange(len(weights)), positive)
+        extra = rng.choice(rest, size=n - len(positive), replace=False)
+        return np.r_[positive, extra]
+    p = weights[positive] / weights[positive].sum()
+    return positive[rng.choice(len(positive), size=n, replace=False, p=p)]
+
+
+def uniform_keypoints(count: int, n: int, seed) -> np.ndarray:
+    """``n`` indices drawn uniformly without replacement from ``count`` points."""
+    rng = np.random.default_rng(seed)
+    return rng.choice(int(count), size=min(int(n), int(count)), replace=False)

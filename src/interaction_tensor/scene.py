@@ -1,0 +1,83 @@
+"""Scene preparation: sampled points, normals and the nearest-neighbour index."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from .io import Geometry, validate_geometry
+from .sampling import estimate_normals, mean_spacing, mesh_area, sample_mesh
+
+
+#: Grid cell edge of the Numba nearest-neighbour search, in scene spacings (fastest of
+#: 1, 2, 3, 4 on the demo room; see benchmarks/).
+GRID_CELL_FACTOR = 3.0
+
+
+@dataclass
+class Scene:
+    """A scene ready for detection.
+
+    Attributes
+    ----------
+    points : (N, 3) float64, metres, +Z up
+    normals : (N, 3) float64 unit normals (their sign may be arbitrary, see DetectSettings)
+    spacing : float, mean distance (m) between neighbouring points
+    source : str, where the scene came from
+    sampled : bool, True when the points were sampled from a mesh
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    spacing: float
+    source: str = "<array>"
+    sampled: bool = False
+    _tree: cKDTree | None = field(default=None, repr=False)
+    _grid: object = field(default=None, repr=False)
+
+    @property
+    def tree(self) -> cKDTree:
+        """KD-tree over ``points`` (built on first use)."""
+        if self._tree is None:
+            self._tree = cKDTree(self.points)
+        return self._tree
+
+    def grid(self):
+        """Uniform grid over ``points`` for the Numba kernels (built on first use)."""
+        if self._grid is None:
+            from .kernels import build_grid
+
+            self._grid = build_grid(self.points, self.normals, GRID_CELL_FACTOR * self.spacing)
+        return self._grid
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+
+def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
+                  max_points: int = 5_000_000, face_mask=None) -> Scene:
+    """Turn a mesh or a point cloud into a :class:`Scene`.
+
+    Meshes are sampled area-uniformly at ``spacing`` (m): count = area / spacing^2, at most
+    ``max_points``. Point clouds are used as they are; their normals are estimated by PCA
+    when the file had none.
+    """
+    validate_geometry(geometry)
+    if geometry.is_mesh:
+        area = mesh_area(geometry) if face_mask is None else mesh_area(
+            Geometry(geometry.vertices, geometry.faces[face_mask]))
+        count = int(np.clip(round(area / spacing ** 2), 100, max_points))
+        points, normals = sample_mesh(geometry, count, seed, face_mask=face_mask)
+        scene = Scene(points, normals, spacing, geometry.source, sampled=True)
+        return scene
+    points = geometry.vertices
+    tree = cKDTree(points)
+    normals = geometry.normals
+    if normals is None or len(normals) != len(points):
+        normals = estimate_normals(points, tree=tree)
+    else:
+        length = np.linalg.norm(normals, axis=1, keepdims=True)
+        normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+    return Scene(points, normals, mean_spacing(points, tree), geometry.source, False, tree)

@@ -1,0 +1,116 @@
+"""The command line through its real entry point (the installed ``itensor`` script)."""
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from interaction_tensor.io import write_mesh, write_ply_points
+
+from conftest import corner_example
+
+ITENSOR = shutil.which("itensor") or None
+
+
+def run(*args, check=None):
+    cmd = [ITENSOR] if ITENSOR else [sys.executable, "-m", "interaction_tensor.cli"]
+    proc = subprocess.run(cmd + [str(a) for a in args], capture_output=True, text=True,
+                          timeout=600, env={**os.environ, "PYTHONWARNINGS": "ignore"})
+    if check is not None:
+        assert proc.returncode == check, proc.stderr
+    return proc
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cli")
+    q, s = corner_example()
+    write_mesh(d / "box.ply", q.vertices, q.faces)
+    write_mesh(d / "corner.ply", s.vertices, s.faces)
+    return d
+
+
+@pytest.fixture(scope="module")
+def descriptor(files):
+    out = files / "corner.npz"
+    run("train", files / "box.ply", files / "corner.ply", "--affordance", "corner-box",
+        "-o", out, "--query-points", 3000, check=0)
+    return out
+
+
+def test_train_info_detect(files, descriptor):
+    info = run("info", descriptor, check=0)
+    assert "corner-box" in info.stdout and "weighted keypoints" in info.stdout
+    js = json.loads(run("info", descriptor, "--json", check=0).stdout)
+    assert js["keypoints"]["weighted"]["count"] == 512
+    out = files / "det"
+    proc = run("detect", files / "corner.ply", descriptor, "-o", out, "--top-k", 3,
+               "--sample-fraction", 0.2, "--seed", 4, check=0)
+    assert "after the normal filter" in proc.stdout
+    doc = json.loads((out / "predictions.json").read_text())
+    assert doc["affordance"] == "corner-box"
+    assert 1 <= len(doc["predictions"]) <= 3
+    p = doc["predictions"][0]
+    assert set(p) >= {"position", "orientation_index", "angle", "score", "pose"}
+    assert np.asarray(p["pose"]).shape == (4, 4)
+    for key in ("scene_points", "test_points_sampled", "candidates_after_normal_filter",
+                "keypoint_comparisons", "seconds"):
+        assert key in doc["stats"]
+    assert doc["accepted"]["count"] == len(doc["accepted"]["score"])
+    assert (out / "heatmap.ply").stat().st_size > 0
+    header = (out / "heatmap.ply").read_bytes()[:400].decode("ascii", "replace")
+    assert "property float score" in header and "property uchar red" in header
+    tops = sorted((out / "top").glob("top_*.ply"))
+    assert len(tops) == len(doc["predictions"])
+    # no temporary files left behind
+    assert not [f for f in out.rglob("*") if ".part" in f.name]
+
+
+def _one_line_error(proc, *words):
+    assert proc.returncode == 2, (proc.returncode, proc.stdout, proc.stderr)
+    err = proc.stderr.strip()
+    assert "Traceback" not in proc.stderr
+    assert len(err.splitlines()) == 1, err
+    for w in words:
+        assert w in err, err
+
+
+def test_bad_inputs_give_one_line_errors(files, descriptor, tmp_path):
+    _one_line_error(run("train", tmp_path / "nope.ply", files / "corner.ply",
+                        "--affordance", "x", "-o", tmp_path / "x.npz"), "nope.ply", "no such file")
+    _one_line_error(run("train", tmp_path, files / "corner.ply", "--affordance", "x",
+                        "-o", tmp_path / "x.npz"), "is a directory")
+    empty = tmp_path / "empty.ply"
+    empty.write_bytes(b"")
+    _one_line_error(run("train", empty, files / "corner.ply", "--affordance", "x",
+                        "-o", tmp_path / "x.npz"), "empty.ply", "empty")
+    nan = tmp_path / "nan.ply"
+    pts = np.random.default_rng(0).random((20, 3))
+    pts[3] = np.nan
+    write_ply_points(nan, pts)
+    _one_line_error(run("detect", nan, descriptor, "-o", tmp_path / "o"), "nan.ply", "NaN")
+    # objects that do not touch: the query 3 m above the scene-object
+    far = tmp_path / "far.ply"
+    q, _ = corner_example()
+    write_mesh(far, q.vertices + [0, 0, 3.0], q.faces)
+    _one_line_error(run("train", far, files / "corner.ply", "--affordance", "x",
+                        "-o", tmp_path / "far.npz"), "do not")
+    not_descriptor = tmp_path / "fake.npz"
+    not_descriptor.write_bytes(b"PK not really")
+    _one_line_error(run("detect", files / "corner.ply", not_descriptor, "-o", tmp_path / "o"),
+                    "fake.npz")
+    _one_line_error(run("info", tmp_path / "missing.npz"), "missing.npz")
+    # nothing half-written: no descriptor and no output directory contents after failures
+    assert not (tmp_path / "x.npz").exists() and not (tmp_path / "far.npz").exists()
+    assert not list(tmp_path.glob("*.part*"))
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
+def test_usage_errors_exit_non_zero():
+    proc = run("detect")
+    assert proc.returncode == 2 and "usage" in proc.stderr
+    assert run("--version", check=0).stdout.startswith("itensor ")

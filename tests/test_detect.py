@@ -1,0 +1,139 @@
+import numpy as np
+import pytest
+
+import interaction_tensor as it
+from interaction_tensor.detect import candidate_mask, keypoint_table
+from interaction_tensor.examples.procedural import box_part, parts_mesh
+from interaction_tensor.kernels import build_grid, nearest_indices
+from interaction_tensor.scoring import score_pairs, score_pairs_exact
+
+from conftest import corner_example
+
+
+def moved_corner_scene(angle, shift):
+    """The corner scene-object turned by ``angle`` about +Z and moved by ``shift``, on a
+    larger floor, with a free-standing box elsewhere."""
+    _, scene_object = corner_example()
+    c, s = np.cos(angle), np.sin(angle)
+    rot = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    v = scene_object.vertices @ rot.T + shift
+    extra = parts_mesh([box_part("floor2", (shift[0] - 0.8, shift[1], shift[2] - 0.01), (0.6, 0.6, 0.02)),
+                        box_part("crate", (shift[0] - 0.8, shift[1], shift[2] + 0.1), (0.2, 0.2, 0.2))])
+    scene = it.Geometry(np.vstack([v, extra.vertices]),
+                        np.vstack([scene_object.faces, extra.faces + len(v)]), source="moved")
+    return scene, rot
+
+
+@pytest.mark.parametrize("k", [2, 5])
+def test_moved_copy_is_found_at_the_right_place_and_orientation(corner_tensor, k):
+    angle = k * 2 * np.pi / 8
+    shift = np.array([2.0, -1.0, 0.3])
+    scene_geometry, rot = moved_corner_scene(angle, shift)
+    scene = it.prepare_scene(scene_geometry, corner_tensor.scene_spacing, seed=3)
+    result = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=1.0, top_k=3,
+                                                               oriented_normals=True))
+    best = result.predictions[0]
+    expected = rot @ corner_tensor.reference_point + shift
+    assert np.linalg.norm(best.position - expected) < 0.03
+    assert best.orientation_index == k
+    # the pose puts the query box where the training box would be after the same motion
+    box = corner_tensor.query_vertices
+    placed = box @ best.pose[:3, :3].T + best.pose[:3, 3]
+    np.testing.assert_allclose(placed, box @ rot.T + shift, atol=0.03)
+    st = result.stats
+    assert st["candidates_after_normal_filter"] <= st["test_points_sampled"] == len(scene)
+    assert st["keypoint_comparisons"] > 0 and st["pairs_accepted"] >= 1
+
+
+def test_detection_is_deterministic(corner_tensor):
+    scene_geometry, _ = moved_corner_scene(0.3, np.array([0.0, 0.0, 0.0]))
+    runs = []
+    for _ in range(2):
+        scene = it.prepare_scene(scene_geometry, 0.01, seed=5)
+        r = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.1, seed=9))
+        runs.append(r)
+    np.testing.assert_array_equal(runs[0].pairs.score, runs[1].pairs.score)
+    np.testing.assert_array_equal(runs[0].candidate_indices, runs[1].candidate_indices)
+
+
+@pytest.fixture(scope="module")
+def scored_setup(corner_tensor):
+    scene_geometry, _ = moved_corner_scene(np.pi / 2, np.array([0.5, 0.5, 0.0]))
+    scene = it.prepare_scene(scene_geometry, 0.01, seed=2)
+    rng = np.random.default_rng(0)
+    idx = rng.choice(len(scene), 500, replace=False)
+    idx = idx[candidate_mask(scene.normals[idx], corner_tensor.affordance_normal, 15, False)]
+    pp = np.repeat(idx, 8)
+    po = np.tile(np.arange(8), len(idx))
+    return scene, pp, po
+
+
+@pytest.mark.parametrize("criterion", ["paper", "gaussian"])
+@pytest.mark.parametrize("keypoints", ["weighted", "uniform"])
+def test_early_exit_and_numba_decide_like_the_exact_reference(corner_tensor, scored_setup,
+                                                             criterion, keypoints):
+    scene, pp, po = scored_setup
+    settings = it.DetectSettings(criterion=criterion, keypoints=keypoints)
+    table = keypoint_table(corner_tensor, settings)
+    thr = corner_tensor.threshold(criterion, keypoints)
+    ref = score_pairs_exact(scene.points[pp], po, table, scene, thr)
+    assert 0 < ref.accepted.sum() < len(pp)           # a real mix of decisions
+    fast = score_pairs(scene.points[pp], po, table, scene, thr, early_exit=True)
+    np.testing.assert_array_equal(fast.accepted, ref.accepted)
+    np.testing.assert_allclose(fast.score[ref.accepted], ref.score[ref.accepted], atol=1e-9)
+    assert fast.comparisons < ref.comparisons           # the early exit saved work
+    assert np.all(fast.score[~ref.accepted] <= ref.score[~ref.accepted] + 1e-9)
+    from interaction_tensor.kernels import score_pairs_numba
+    s, a, at, cmp = score_pairs_numba(scene.points[pp], po, table, scene.grid(), thr,
+                                      corner_tensor.vectors, scene.spacing)
+    np.testing.assert_array_equal(a, ref.accepted)
+    np.testing.assert_allclose(s[a], ref.score[a], atol=1e-9)
+    np.testing.assert_array_equal(at, fast.decided_at)
+    assert np.all(at <= table.n) and np.all(at >= 1)
+
+
+def test_grid_nearest_neighbour_is_exact():
+    from scipy.spatial import cKDTree
+    rng = np.random.default_rng(4)
+    pts = rng.random((5000, 3)) * [2, 1, 0.5]
+    grid = build_grid(pts, np.zeros_like(pts), 0.05)
+    q = rng.random((3000, 3)) * [3, 2, 1.5] - [0.5, 0.5, 0.5]     # inside and outside
+    ref = cKDTree(pts).query(q)[1]
+    got = nearest_indices(grid, q)
+    d_ref = np.linalg.norm(pts[ref] - q, axis=1)
+    d_got = np.linalg.norm(pts[got] - q, axis=1)
+    np.testing.assert_allclose(d_got, d_ref, rtol=0, atol=1e-12)
+
+
+def test_backends_give_the_same_detection(corner_tensor):
+    scene_geometry, _ = moved_corner_scene(1.0, np.array([0.2, 0.1, 0.0]))
+    scene = it.prepare_scene(scene_geometry, 0.01, seed=1)
+    a = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.05, backend="numpy"))
+    b = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.05, backend="numba"))
+    np.testing.assert_array_equal(a.pairs.accepted, b.pairs.accepted)
+    assert [p.point_index for p in a.predictions] == [p.point_index for p in b.predictions]
+
+
+def test_normal_filter_line_and_oriented():
+    n = np.array([[0, 0, 1], [0, 0, -1], [1, 0, 0], [0, np.sin(0.2), np.cos(0.2)]], float)
+    assert candidate_mask(n, [0, 0, 1], 15, False).tolist() == [True, True, False, True]
+    assert candidate_mask(n, [0, 0, 1], 15, True).tolist() == [True, False, False, True]
+    assert candidate_mask(n, [0, 0, 1], 10, True).tolist() == [True, False, False, False]
+
+
+def test_top_k_suppression_keeps_predictions_apart(corner_tensor):
+    from interaction_tensor.predictions import top_k
+    pos = np.array([[0, 0, 0], [0.01, 0, 0], [1, 0, 0], [1.02, 0, 0], [3, 0, 0]], float)
+    sc = np.array([0.9, 0.95, 0.8, 0.85, 0.1])
+    assert top_k(pos, sc, 10, 0.05) == [1, 3, 4]
+    assert top_k(pos, sc, 2, 0.05) == [1, 3]
+    assert top_k(pos, sc, 0, 0.05) == []
+
+
+def test_settings_are_validated():
+    with pytest.raises(it.SettingsError):
+        it.DetectSettings(sample_fraction=0)
+    with pytest.raises(it.SettingsError):
+        it.DetectSettings(criterion="magic")
+    with pytest.raises(it.SettingsError):
+        it.TrainSettings(affordance_normal=(0, 0, 0))
