@@ -114,3 +114,20 @@ def test_usage_errors_exit_non_zero():
     proc = run("detect")
     assert proc.returncode == 2 and "usage" in proc.stderr
     assert run("--version", check=0).stdout.startswith("itensor ")
+
+
+def test_detect_on_an_rgbd_frame_directory(files, descriptor, tmp_path):
+    from conftest import shared_file
+    frame = shared_file("rgbd/tum_desk/intrinsics.json").parent
+    out = tmp_path / "tum"
+    proc = run("detect", frame, descriptor, "-o", out, "--sample-fraction", 0.05,
+               "--voxel-size", 0.02, "--quiet")
+    assert proc.returncode == 0, proc.stderr
+    doc = json.loads((out / "predictions.json").read_text())
+    assert doc["parameters"]["criterion"] == "gaussian"       # the default for captured data
+    assert "real_scene" in doc
+    assert (out / "predictions_input_frame.json").exists()
+    assert (out / "heatmap_input_frame.ply").exists()
+    _one_line_error(run("detect", descriptor, "-o", tmp_path / "x",
+                        "--depth", frame / "color.png", "--intrinsics", frame / "intrinsics.json"),
+                    "color.png")

@@ -16,11 +16,14 @@ from .io import Geometry, load_geometry  # noqa: E402
 from .settings import DetectSettings, TrainSettings  # noqa: E402
 from .descriptor import InteractionTensor, Keypoints  # noqa: E402
 from .scene import Scene, prepare_scene  # noqa: E402
-from .detect import Detection, detect, score_at  # noqa: E402
+from .detect import Detection, detect, detect_many, score_at  # noqa: E402
 from .predictions import Prediction, export  # noqa: E402
+from .realdata import (load_intrinsics, load_rgbd, prepare_real_scene,  # noqa: E402
+                       write_input_frame_outputs)
 
 __all__ = [
     "__version__", "InputError", "ItensorError", "SettingsError", "Geometry", "load_geometry",
     "DetectSettings", "TrainSettings", "InteractionTensor", "Keypoints", "Scene",
-    "prepare_scene", "Detection", "detect", "score_at", "Prediction", "export",
+    "prepare_scene", "Detection", "detect", "detect_many", "score_at", "Prediction", "export",
+    "load_intrinsics", "load_rgbd", "prepare_real_scene", "write_input_frame_outputs",
 ]

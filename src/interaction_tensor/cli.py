@@ -130,16 +130,56 @@ def _report(args, result, outdir) -> None:
 
 def cmd_detect(args) -> int:
     from .descriptor import InteractionTensor
+    from .detect import detect
     from .io import load_geometry
+    from .predictions import export
+    from .realdata import is_real_input, scene_from_args, write_input_frame_outputs
 
     tensor = InteractionTensor.load(args.descriptor)
+    real = is_real_input(args)
+    if args.criterion is None:
+        # captured depth is too noisy for the paper criterion's tight tests on short vectors
+        # (README, "Your own RGB-D data"); the authors' own code criterion copes with it
+        args.criterion = "gaussian" if real else "paper"
     settings = _detect_settings(args)
-    scene_geometry = load_geometry(args.scene, args.scale, args.up)
-    outdir = _out_dir(args.output)
-    result = run_detection(scene_geometry, tensor, settings, outdir, _show_progress(args),
-                           str(args.scene), str(args.descriptor))
+    if not real:
+        if args.scene is None:
+            raise InputError(None, "give a scene file, an RGB-D frame directory, or "
+                                   "--depth and --intrinsics")
+        up = "z" if args.up == "auto" else args.up
+        if up not in ("z", "y"):
+            raise InputError(args.scene, f"--up {args.up} needs --scan for a scene file; "
+                                         "use z or y")
+        scene_geometry = load_geometry(args.scene, args.scale, up)
+        outdir = _out_dir(args.output)
+        result = run_detection(scene_geometry, tensor, settings, outdir, _show_progress(args),
+                               str(args.scene), str(args.descriptor))
+    else:
+        outdir = _out_dir(args.output)
+        t0 = time.perf_counter()
+        scene, report, transform = scene_from_args(args, tensor.scene_spacing)
+        t_prep = time.perf_counter() - t0
+        for warning in report.warnings:
+            print(f"itensor: warning: {warning}", file=sys.stderr)
+        result = detect(scene, tensor, settings, progress=_show_progress(args))
+        result.stats["seconds"]["scene_preparation"] = round(t_prep, 4)
+        export(result, outdir, report.source, str(args.descriptor))
+        write_input_frame_outputs(result, outdir, transform, report)
+        if report.alignment is not None:
+            _say(args, f"aligned: {report.alignment['kind']} plane at z = 0 (camera height "
+                       f"{report.alignment.get('camera_height_m', '-')} m); also wrote "
+                       "predictions_input_frame.json, heatmap_input_frame.ply, top_input_frame/")
     _report(args, result, outdir)
+    _after_detect(args, outdir)
     return 0
+
+
+def _after_detect(args, outdir) -> None:
+    """Optional pictures after a detection (``--render``)."""
+    if getattr(args, "render", False):
+        from .cli_viz import render_after_detect
+
+        render_after_detect(outdir, quiet=getattr(args, "quiet", False))
 
 
 # --------------------------------------------------------------------------- info
@@ -189,8 +229,10 @@ def cmd_demo(args) -> int:
     _report(args, result, outdir)
     surfaces = demo.surface_names(ex, [p.position for p in result.predictions[:5]])
     _say(args, "top 5 landed on: " + ", ".join(surfaces))
+    _after_detect(args, outdir)
     _say(args, f"demo finished in {time.perf_counter() - t0:.1f} s; open {outdir}/scene.ply "
-               f"with {outdir}/heatmap.ply and {outdir}/top/*.ply in MeshLab")
+               f"with {outdir}/heatmap.ply and {outdir}/top/*.ply in MeshLab, or run "
+               f"'itensor view {outdir}' for a page to open in a browser")
     return 0
 
 
@@ -223,14 +265,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=cmd_train)
 
     p = sub.add_parser("detect", help="find where a trained interaction can happen in a scene")
-    p.add_argument("scene", help="scene mesh or point cloud")
+    p.add_argument("scene", nargs="?", default=None,
+                   help="scene mesh or point cloud, or an RGB-D frame directory "
+                        "(color.png, depth.png, intrinsics.json); omit with --depth/--intrinsics")
     p.add_argument("descriptor", help="descriptor written by 'itensor train'")
     p.add_argument("-o", "--output", required=True, help="output directory")
     p.add_argument("--top-k", type=int, default=10, help="predictions kept after suppression")
     p.add_argument("--sample-fraction", type=_fraction, default=0.30,
                    help="fraction of scene points used as test points (paper: 0.3)")
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--criterion", choices=("paper", "gaussian"), default="paper")
+    p.add_argument("--criterion", choices=("paper", "gaussian"), default=None,
+                   help="score criterion: paper (default for meshes and clouds) or gaussian "
+                        "(the authors' code; default for RGB-D frames and --scan)")
     p.add_argument("--keypoints", choices=("weighted", "uniform"), default="weighted")
     p.add_argument("--threshold", type=_fraction, default=None,
                    help="acceptance threshold on the normalised score (default: calibrated)")
@@ -241,12 +287,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--oriented-normals", action="store_true",
                    help="trust the sign of scene normals (default: compare the normal line)")
     p.add_argument("--nms-radius", type=float, default=None,
-                   help="suppression radius in metres (default: half the query's diagonal)")
+                   help="suppression radius in metres (default: the query object's width)")
     p.add_argument("--no-early-exit", action="store_true",
                    help="compare every keypoint of every candidate")
     p.add_argument("--backend", choices=("auto", "numba", "numpy"), default="auto")
+    p.add_argument("--render", action="store_true",
+                   help="also write render.png: the heat map and the top predictions")
     p.add_argument("-q", "--quiet", action="store_true")
     _geometry_options(p)
+    from .realdata import add_realdata_options
+
+    add_realdata_options(p)
     p.set_defaults(func=cmd_detect)
 
     p = sub.add_parser("info", help="print what a descriptor holds")
@@ -258,6 +309,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", default="demo_out", help="output directory")
     p.add_argument("--top-k", type=int, default=10)
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--render", action="store_true",
+                   help="also write render.png: the heat map and the top predictions")
     p.add_argument("-q", "--quiet", action="store_true")
     p.set_defaults(func=cmd_demo)
 
@@ -266,8 +319,14 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _register_viz(sub) -> None:
+    from .cli_viz import register
+
+    register(sub)
+
+
 #: Functions that add further subcommands: ``register(subparsers)``.
-_EXTENSIONS: list = []
+_EXTENSIONS: list = [_register_viz]
 
 
 def main(argv=None) -> int:

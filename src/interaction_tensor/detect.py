@@ -15,7 +15,7 @@ import numpy as np
 from .descriptor import InteractionTensor
 from .predictions import Prediction, heat_map, top_k
 from .scene import Scene
-from .kernels import score_pairs_numba
+from .kernels import ScoreJob, score_jobs
 from .scoring import PairScores, make_table, score_pairs
 from .settings import DetectSettings
 
@@ -118,6 +118,145 @@ class Detection:
         return 2 * np.pi * np.asarray(orientation_index) / self.settings.n_orientations
 
 
+def suppression_radius(tensor: InteractionTensor, settings: DetectSettings) -> float:
+    """Top-k suppression radius (m): the setting, else the query object's width."""
+    if settings.nms_radius is not None:
+        return float(settings.nms_radius)
+    return float(np.ptp(tensor.query_vertices[:, :2], axis=0).max())
+
+
+def _test_points(scene: Scene, settings: DetectSettings) -> np.ndarray:
+    rng = np.random.default_rng(settings.seed)
+    n_test = max(1, int(round(settings.sample_fraction * len(scene))))
+    return np.sort(rng.choice(len(scene), size=n_test, replace=False))
+
+
+def _prepare_index(scene: Scene, settings: DetectSettings):
+    backend = resolve_backend(settings.backend)
+    if backend == "numba":
+        return backend, scene.grid()
+    _ = scene.tree
+    return backend, None
+
+
+def _score_all(scene, jobs, backend, grid, settings, progress, label):
+    """Score every job's pairs in candidate batches; returns per job PairScores.
+
+    Here a job's ``points`` are scene indices, gathered batch by batch to bound memory.
+    """
+    n_o = settings.n_orientations
+    step = settings.batch_size * n_o
+    totals = [np.zeros(len(j.points)) for j in jobs]
+    acc = [np.zeros(len(j.points), bool) for j in jobs]
+    at = [np.zeros(len(j.points), np.int64) for j in jobs]
+    cmp_ = [0] * len(jobs)
+    longest = max((len(j.points) for j in jobs), default=0)
+    bar = None
+    if progress:
+        from tqdm import tqdm
+        bar = tqdm(total=longest // n_o, unit="pt", desc=f"detect {label}", leave=False)
+    for start in range(0, longest, step):
+        sl = slice(start, start + step)
+        if backend == "numba":
+            batch = [ScoreJob(scene.points[j.points[sl]], j.orient[sl], j.table, j.threshold, j.vectors,
+                              j.rho, j.early_exit) for j in jobs]
+            for i, (s, a, d, c) in enumerate(score_jobs(batch, grid, settings.nn_cache)):
+                totals[i][sl], acc[i][sl], at[i][sl] = s, a, d
+                cmp_[i] += int(c.sum())
+        else:
+            for i, j in enumerate(jobs):
+                if start >= len(j.points):
+                    continue
+                res = score_pairs(scene.points[j.points[sl]], j.orient[sl], j.table, scene, j.threshold,
+                                  vectors=j.vectors, early_exit=j.early_exit)
+                totals[i][sl], acc[i][sl], at[i][sl] = res.score, res.accepted, res.decided_at
+                cmp_[i] += res.comparisons
+        if bar is not None:
+            bar.update(min(step, longest - start) // n_o)
+    if bar is not None:
+        bar.close()
+    return [PairScores(t, a, d, c) for t, a, d, c in zip(totals, acc, at, cmp_)]
+
+
+def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair_orient,
+            pairs, timings, backend, t0) -> Detection:
+    """Heat map, top-k with suppression, statistics."""
+    n_o = settings.n_orientations
+    t3 = time.perf_counter()
+    heat, count = heat_map(scene, pair_point, pairs.score, pairs.accepted)
+    radius = suppression_radius(tensor, settings)
+    acc = np.flatnonzero(pairs.accepted)
+    angles = 2 * np.pi * pair_orient / n_o
+    picks = top_k(scene.points[pair_point[acc]], pairs.score[acc], settings.top_k, radius)
+    predictions = [
+        Prediction(position=scene.points[pair_point[acc[i]]].copy(),
+                   orientation_index=int(pair_orient[acc[i]]), angle=float(angles[acc[i]]),
+                   score=float(pairs.score[acc[i]]),
+                   pose=tensor.pose(scene.points[pair_point[acc[i]]], angles[acc[i]]),
+                   point_index=int(pair_point[acc[i]]))
+        for i in picks]
+    timings["predictions"] = time.perf_counter() - t3
+    timings["total"] = time.perf_counter() - t0
+    decided = pairs.decided_at
+    stats = {
+        "scene_points": int(len(scene)),
+        "test_points_sampled": int(len(test_idx)),
+        "candidates_after_normal_filter": int(len(cand)),
+        "pairs_scored": int(len(pair_point)),
+        "pairs_accepted": int(pairs.accepted.sum()),
+        "keypoint_comparisons": int(pairs.comparisons),
+        "keypoint_comparisons_to_decision": int(decided.sum()),
+        "mean_comparisons_per_decision": float(decided.mean()) if len(decided) else 0.0,
+        "threshold": threshold,
+        "backend": backend,
+        "nn_cache": settings.nn_cache,
+        "seconds": {k: round(v, 4) for k, v in timings.items()},
+        "test_points_per_second": (float(len(test_idx) / timings["scoring"])
+                                   if timings.get("scoring", 0) > 0 else None),
+    }
+    return Detection(scene, tensor, settings, threshold, test_idx, cand, pair_point,
+                     pair_orient, pairs, heat, count, predictions, stats)
+
+
+def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = None,
+                progress: bool = False) -> list:
+    """Detect several interactions in one pass over a scene.
+
+    The test points, the scene index and (with ``settings.nn_cache``) the nearest-neighbour
+    cache are shared by all descriptors; each gets its own candidates (its N_aff), threshold
+    and :class:`Detection`.
+    """
+    settings = settings or DetectSettings()
+    t0 = time.perf_counter()
+    timings = {}
+    test_idx = _test_points(scene, settings)
+    n_o = settings.n_orientations
+    cands, jobs, pp_list, po_list = [], [], [], []
+    for tensor in tensors:
+        ok = candidate_mask(scene.normals[test_idx], tensor.affordance_normal,
+                            settings.normal_tolerance_deg, settings.oriented_normals)
+        cand = test_idx[ok]
+        pp, po = np.repeat(cand, n_o), np.tile(np.arange(n_o), len(cand))
+        cands.append(cand)
+        pp_list.append(pp)
+        po_list.append(po)
+        jobs.append(ScoreJob(pp, po, keypoint_table(tensor, settings),   # points: indices
+                             resolve_threshold(tensor, settings), tensor.vectors,
+                             scene.spacing, settings.early_exit))
+    timings["candidates"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    backend, grid = _prepare_index(scene, settings)
+    timings["index"] = time.perf_counter() - t1
+    t2 = time.perf_counter()
+    label = tensors[0].affordance if len(tensors) == 1 else f"{len(tensors)} affordances"
+    scores = _score_all(scene, jobs, backend, grid, settings, progress, label)
+    timings["scoring"] = time.perf_counter() - t2
+    return [_finish(scene, tensor, settings, job.threshold, test_idx, cand, pp, po, pairs,
+                    dict(timings), backend, t0)
+            for tensor, job, cand, pp, po, pairs in zip(tensors, jobs, cands, pp_list,
+                                                        po_list, scores)]
+
+
 def detect(scene: Scene, tensor: InteractionTensor, settings: DetectSettings | None = None,
            progress: bool = False) -> Detection:
     """Find where the interaction of ``tensor`` can happen in ``scene``.
@@ -129,93 +268,4 @@ def detect(scene: Scene, tensor: InteractionTensor, settings: DetectSettings | N
     settings : DetectSettings (defaults if None)
     progress : show a progress bar over candidate batches
     """
-    settings = settings or DetectSettings()
-    timings = {}
-    t0 = time.perf_counter()
-    rng = np.random.default_rng(settings.seed)
-    n_test = max(1, int(round(settings.sample_fraction * len(scene))))
-    test_idx = np.sort(rng.choice(len(scene), size=n_test, replace=False))
-    ok = candidate_mask(scene.normals[test_idx], tensor.affordance_normal,
-                        settings.normal_tolerance_deg, settings.oriented_normals)
-    cand = test_idx[ok]
-    timings["candidates"] = time.perf_counter() - t0
-
-    t1 = time.perf_counter()
-    backend = resolve_backend(settings.backend)
-    if backend == "numba":       # build the index outside the timed scoring loop
-        grid = scene.grid()
-    else:
-        _ = scene.tree
-    timings["index"] = time.perf_counter() - t1
-
-    t2 = time.perf_counter()
-    table = keypoint_table(tensor, settings)
-    threshold = resolve_threshold(tensor, settings)
-    n_o = settings.n_orientations
-    pair_point = np.repeat(cand, n_o)
-    pair_orient = np.tile(np.arange(n_o), len(cand))
-    score = np.zeros(len(pair_point))
-    accepted = np.zeros(len(pair_point), bool)
-    decided_at = np.zeros(len(pair_point), np.int64)
-    comparisons = 0
-    step = settings.batch_size * n_o
-    batches = range(0, len(pair_point), step)
-    bar = None
-    if progress:
-        from tqdm import tqdm
-        bar = tqdm(total=len(cand), unit="pt", desc=f"detect {tensor.affordance}",
-                   leave=False)
-    for start in batches:
-        sl = slice(start, start + step)
-        if backend == "numba":
-            s, a, at, cmp = score_pairs_numba(scene.points[pair_point[sl]], pair_orient[sl],
-                                              table, grid, threshold, tensor.vectors,
-                                              scene.spacing, settings.early_exit)
-            score[sl], accepted[sl], decided_at[sl] = s, a, at
-            comparisons += int(cmp.sum())
-        else:
-            res = score_pairs(scene.points[pair_point[sl]], pair_orient[sl], table, scene,
-                              threshold, vectors=tensor.vectors, early_exit=settings.early_exit)
-            score[sl], accepted[sl], decided_at[sl] = res.score, res.accepted, res.decided_at
-            comparisons += res.comparisons
-        if bar is not None:
-            bar.update((sl.stop if sl.stop < len(pair_point) else len(pair_point)) // n_o
-                       - start // n_o)
-    if bar is not None:
-        bar.close()
-    pairs = PairScores(score, accepted, decided_at, comparisons)
-    timings["scoring"] = time.perf_counter() - t2
-
-    t3 = time.perf_counter()
-    heat, count = heat_map(scene, pair_point, pairs.score, pairs.accepted)
-    radius = settings.nms_radius if settings.nms_radius is not None else 0.5 * tensor.radius
-    acc = np.flatnonzero(accepted)
-    angles = 2 * np.pi * pair_orient / n_o
-    picks = top_k(scene.points[pair_point[acc]], score[acc], settings.top_k, radius)
-    predictions = [
-        Prediction(position=scene.points[pair_point[acc[i]]].copy(),
-                   orientation_index=int(pair_orient[acc[i]]), angle=float(angles[acc[i]]),
-                   score=float(score[acc[i]]),
-                   pose=tensor.pose(scene.points[pair_point[acc[i]]], angles[acc[i]]),
-                   point_index=int(pair_point[acc[i]]))
-        for i in picks]
-    timings["predictions"] = time.perf_counter() - t3
-    timings["total"] = time.perf_counter() - t0
-    n_decided = decided_at[accepted | ~accepted]
-    stats = {
-        "scene_points": int(len(scene)),
-        "test_points_sampled": int(n_test),
-        "candidates_after_normal_filter": int(len(cand)),
-        "pairs_scored": int(len(pair_point)),
-        "pairs_accepted": int(accepted.sum()),
-        "keypoint_comparisons": int(comparisons),
-        "keypoint_comparisons_to_decision": int(n_decided.sum()),
-        "mean_comparisons_per_decision": float(n_decided.mean()) if len(n_decided) else 0.0,
-        "threshold": threshold,
-        "backend": backend,
-        "seconds": {k: round(v, 4) for k, v in timings.items()},
-        "test_points_per_second": (float(len(cand) / timings["scoring"])
-                                   if timings["scoring"] > 0 else None),
-    }
-    return Detection(scene, tensor, settings, threshold, test_idx, cand, pair_point,
-                     pair_orient, pairs, heat, count, predictions, stats)
+    return detect_many(scene, [tensor], settings, progress)[0]

@@ -87,58 +87,93 @@ def nearest_indices(grid: Grid, queries: np.ndarray) -> np.ndarray:
     return grid.order[out]
 
 
-def score_pairs_numba(points, orient, table, grid: Grid, threshold: float, vectors: str,
-                      rho: float, early_exit: bool = True, cache_cell: float | None = None):
-    """Numba version of :func:`interaction_tensor.scoring.score_pairs`.
+@dataclass
+class ScoreJob:
+    """One keypoint table to score over a set of (test point, orientation) pairs."""
 
-    With ``cache_cell`` None the nearest neighbours are exact and the results identical to
-    the NumPy path. With ``cache_cell`` h, a keypoint uses the nearest sample of the centre of
-    its h-sized cell, found once per cell and shared by every keypoint that falls in it (the
-    authors' agglomerative trick); the vector is still measured from the keypoint itself.
+    points: np.ndarray
+    orient: np.ndarray
+    table: object
+    threshold: float
+    vectors: str = "surface"
+    rho: float = 0.01
+    early_exit: bool = True
 
-    Returns score, accepted, decided_at, comparisons-per-pair arrays.
+
+def _job_args(job: ScoreJob, grid: Grid) -> tuple:
+    t = job.table
+    pnorm = np.ascontiguousarray(np.linalg.norm(t.provenance[0], axis=1))
+    wmax = t.weights.max()
+    with np.errstate(divide="ignore"):
+        big_w = np.where(t.weights > 0, wmax / np.where(t.weights > 0, t.weights, 1), np.inf)
+    angle_lim = np.minimum(big_w * t.theta_max, np.pi)   # angle limit per keypoint
+    rest = np.r_[np.cumsum(t.max_terms[::-1])[::-1], 0.0]
+    return (np.ascontiguousarray(t.offsets), np.ascontiguousarray(t.provenance), pnorm,
+            np.ascontiguousarray(t.weights), angle_lim, big_w, t.max_terms, rest,
+            0 if t.criterion == "paper" else 1, t.c, t.a, float(t.weights.sum()),
+            float(job.threshold), bool(job.early_exit), job.vectors == "surface",
+            float(job.rho), grid.points, grid.normals, grid.starts, grid.origin, grid.cell,
+            grid.dims)
+
+
+def score_jobs(jobs: list, grid: Grid, cache_cell: float | None = None) -> list:
+    """Score several jobs (e.g. several affordances) over one scene grid.
+
+    With ``cache_cell`` None every nearest neighbour is exact and the results are identical
+    to :func:`interaction_tensor.scoring.score_pairs`. With ``cache_cell`` h, a keypoint uses
+    the nearest sample of the centre of its h-sized cell, found once and shared by every
+    keypoint of every job that falls in that cell (the authors' agglomerative descriptor);
+    the vector is still measured from the keypoint itself. The pairs are processed in cubic
+    tiles so that each tile's cache stays small.
+
+    Returns, per job, (score, accepted, decided_at, comparisons) arrays over its pairs.
     """
     k = _compile()
-    n = table.n
-    pnorm = np.ascontiguousarray(np.linalg.norm(table.provenance[0], axis=1))
-    wmax = table.weights.max()
-    with np.errstate(divide="ignore"):
-        big_w = np.where(table.weights > 0, wmax / np.where(table.weights > 0, table.weights, 1), np.inf)
-    angle_lim = np.minimum(big_w * table.theta_max, np.pi)   # angle limit per keypoint
-    rest = np.r_[np.cumsum(table.max_terms[::-1])[::-1], 0.0]
-    p = len(points)
-    out_score = np.empty(p)
-    out_acc = np.empty(p, np.bool_)
-    out_at = np.empty(p, np.int64)
-    out_cmp = np.empty(p, np.int64)
-    args = (np.ascontiguousarray(table.offsets), np.ascontiguousarray(table.provenance),
-            pnorm, np.ascontiguousarray(table.weights), angle_lim, big_w, table.max_terms,
-            rest, 0 if table.criterion == "paper" else 1, table.c, table.a,
-            float(table.weights.sum()), float(threshold), bool(early_exit),
-            vectors == "surface", float(rho), grid.points, grid.normals, grid.starts,
-            grid.origin, grid.cell, grid.dims)
-    points = np.ascontiguousarray(points, dtype=np.float64)
-    orient = np.ascontiguousarray(orient, np.int64)
+    outs, args = [], []
+    for job in jobs:
+        p = len(job.points)
+        job.points = np.ascontiguousarray(job.points, dtype=np.float64)
+        job.orient = np.ascontiguousarray(job.orient, np.int64)
+        outs.append((np.zeros(p), np.zeros(p, np.bool_), np.zeros(p, np.int64),
+                     np.zeros(p, np.int64)))
+        args.append(_job_args(job, grid))
     if not cache_cell:
-        k["score"](points, orient, *args, out_score, out_acc, out_at, out_cmp,
-                   False, np.full(1, -1, np.int32), np.zeros(3), 1.0, np.ones(3, np.int64))
-        return out_score, out_acc, out_at, out_cmp
-    # cached: split the pairs into cubic tiles so that each tile's cache stays small
-    reach = float(np.abs(table.offsets).max()) + cache_cell
+        for job, a, o in zip(jobs, args, outs):
+            if len(job.points):
+                k["score"](job.points, job.orient, *a, *o, False, np.full(1, -1, np.int32),
+                           np.zeros(3), 1.0, np.ones(3, np.int64))
+        return outs
+    reach = max(float(np.abs(j.table.offsets).max()) for j in jobs) + cache_cell
     tile = max(0.1, (MAX_CACHE_CELLS ** (1 / 3)) * cache_cell - 2 * reach)
-    key = np.floor(points / tile).astype(np.int64)
-    _, tile_of = np.unique(key, axis=0, return_inverse=True)
+    all_points = np.vstack([j.points for j in jobs])
+    if len(all_points) == 0:
+        return outs
+    keys = np.floor(all_points / tile).astype(np.int64)
+    uniq, tile_of = np.unique(keys, axis=0, return_inverse=True)
     tile_of = tile_of.ravel()
-    order = np.argsort(tile_of, kind="stable")
-    bounds = np.flatnonzero(np.diff(tile_of[order])) + 1
-    for sel in np.split(order, bounds):
-        tp = points[sel]
-        co = tp.min(axis=0) - reach
-        cd = np.ceil((tp.max(axis=0) + reach - co) / cache_cell).astype(np.int64) + 1
+    starts = np.cumsum([0] + [len(j.points) for j in jobs])
+    for t in range(len(uniq)):
+        members = tile_of == t
+        tp_all = all_points[members]
+        co = tp_all.min(axis=0) - reach
+        cd = np.ceil((tp_all.max(axis=0) + reach - co) / cache_cell).astype(np.int64) + 1
         cache_arr = np.full(int(np.prod(cd)), -1, np.int32)
-        o_s, o_a = np.empty(len(sel)), np.empty(len(sel), np.bool_)
-        o_t, o_c = np.empty(len(sel), np.int64), np.empty(len(sel), np.int64)
-        k["score"](tp, orient[sel], *args, o_s, o_a, o_t, o_c, True, cache_arr, co,
-                   float(cache_cell), cd)
-        out_score[sel], out_acc[sel], out_at[sel], out_cmp[sel] = o_s, o_a, o_t, o_c
-    return out_score, out_acc, out_at, out_cmp
+        for j, (job, a, o) in enumerate(zip(jobs, args, outs)):
+            sel = np.flatnonzero(members[starts[j]:starts[j + 1]])
+            if len(sel) == 0:
+                continue
+            res = (np.empty(len(sel)), np.empty(len(sel), np.bool_),
+                   np.empty(len(sel), np.int64), np.empty(len(sel), np.int64))
+            k["score"](job.points[sel], job.orient[sel], *a, *res, True, cache_arr, co,
+                       float(cache_cell), cd)
+            for dst, src in zip(o, res):
+                dst[sel] = src
+    return outs
+
+
+def score_pairs_numba(points, orient, table, grid: Grid, threshold: float, vectors: str,
+                      rho: float, early_exit: bool = True, cache_cell: float | None = None):
+    """Numba version of :func:`interaction_tensor.scoring.score_pairs` (one job of
+    :func:`score_jobs`). Returns score, accepted, decided_at, comparisons-per-pair arrays."""
+    job = ScoreJob(points, orient, table, threshold, vectors, rho, early_exit)
+    return score_jobs([job], grid, cache_cell)[0]

@@ -1,0 +1,279 @@
+"""A small software renderer: perspective cameras and a z-buffer of point splats.
+
+Surfaces are drawn as dense point samples ("splats": small screen-space disks sized from the
+sample spacing and the depth), lit with Lambert shading from per-point normals (two-sided)
+and outlined with eye-dome lighting computed from the depth buffer. Lines are sampled into
+unlit one-pixel splats. Everything is vectorised NumPy; no OpenGL, display or GPU.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+BACKGROUND = (255, 255, 255)
+
+
+def _unit(v) -> np.ndarray:
+    v = np.asarray(v, dtype=float)
+    n = np.linalg.norm(v)
+    return v / n if n > 0 else v
+
+
+@dataclass
+class Camera:
+    """A pinhole camera looking from ``eye`` at ``target`` with +Z up.
+
+    Attributes
+    ----------
+    eye, target : (3,) metres
+    width, height : image size in pixels
+    fov_deg : vertical field of view in degrees
+    near : points closer than this (m, along the view axis) are clipped, which cuts away
+        whatever stands between the camera and what it looks at
+    """
+
+    eye: np.ndarray
+    target: np.ndarray
+    width: int = 640
+    height: int = 480
+    fov_deg: float = 40.0
+    near: float = 0.02
+    up: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 1.0]))
+
+    def __post_init__(self):
+        self.eye = np.asarray(self.eye, float)
+        self.target = np.asarray(self.target, float)
+        self.forward = _unit(self.target - self.eye)
+        right = np.cross(self.forward, self.up)
+        if np.linalg.norm(right) < 1e-9:  # looking straight up or down
+            right = np.array([1.0, 0.0, 0.0])
+        self.right = _unit(right)
+        self.upv = np.cross(self.right, self.forward)
+        self.focal = 0.5 * self.height / np.tan(np.radians(self.fov_deg) / 2)
+
+    def scaled(self, factor: int) -> "Camera":
+        """The same view at ``factor`` times the resolution."""
+        return Camera(self.eye, self.target, self.width * factor, self.height * factor,
+                      self.fov_deg, self.near, self.up)
+
+    def project(self, points: np.ndarray):
+        """Pixel coordinates and depth of (N, 3) points: px (N,), py (N,), depth (N,) m."""
+        rel = np.asarray(points, float) - self.eye
+        z = rel @ self.forward
+        zs = np.where(np.abs(z) > 1e-9, z, 1e-9)
+        px = 0.5 * self.width + self.focal * (rel @ self.right) / zs
+        py = 0.5 * self.height - self.focal * (rel @ self.upv) / zs
+        return px, py, z
+
+
+def orbit_camera(target, azimuth_deg: float, elevation_deg: float, distance: float,
+                 width: int, height: int, fov_deg: float = 40.0, near: float = 0.02) -> Camera:
+    """A camera ``distance`` m from ``target`` at the given azimuth (about +Z, from +X) and
+    elevation (above the horizontal), in degrees."""
+    az, el = np.radians(azimuth_deg), np.radians(elevation_deg)
+    direction = np.array([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)])
+    target = np.asarray(target, float)
+    return Camera(target + distance * direction, target, width, height, fov_deg, near)
+
+
+def frame_points(points: np.ndarray, azimuth_deg: float, elevation_deg: float, width: int,
+                 height: int, fov_deg: float = 40.0, margin: float = 0.08,
+                 near_cut: float | None = None) -> Camera:
+    """An orbit camera at the given angles that frames ``points`` (N, 3), centred.
+
+    The distance starts from the bounding sphere and is refined a few times on the
+    projected extent. ``near_cut`` (m): clip everything nearer than the framed points
+    minus this (a cut-away through walls in front); None keeps the default near plane.
+    """
+    pts = np.asarray(points, float)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    target = (lo + hi) / 2
+    radius = max(float(np.linalg.norm(pts - target, axis=1).max()), 1e-3)
+    half = np.radians(fov_deg) / 2
+    aspect = width / height
+    distance = radius / np.sin(min(half, np.arctan(np.tan(half) * aspect))) * 1.02
+    for _ in range(4):
+        cam = orbit_camera(target, azimuth_deg, elevation_deg, distance, width, height, fov_deg)
+        px, py, z = cam.project(pts)
+        if np.any(z <= 1e-6):
+            distance *= 1.5
+            continue
+        x = (px - width / 2) / (width / 2)
+        y = (py - height / 2) / (height / 2)
+        # re-centre: move the target by the mid-point of the projected extent
+        mx, my = (x.min() + x.max()) / 2, (y.min() + y.max()) / 2
+        target = target + (mx * np.tan(half) * aspect * distance) * cam.right \
+            - (my * np.tan(half) * distance) * cam.upv
+        extent = max(x.max() - x.min(), y.max() - y.min()) / 2
+        distance *= max(extent / (1 - margin), 0.2) ** 0.85
+    cam = orbit_camera(target, azimuth_deg, elevation_deg, distance, width, height, fov_deg)
+    if near_cut is not None:
+        _, _, z = cam.project(pts)
+        cam.near = max(0.02, float(z.min()) - near_cut)
+    return cam
+
+
+def _disk(radius: int):
+    r = int(radius)
+    d = np.arange(-r, r + 1)
+    dx, dy = np.meshgrid(d, d)
+    keep = dx ** 2 + dy ** 2 <= r * r + r
+    return dx[keep].ravel(), dy[keep].ravel()
+
+
+class Canvas:
+    """A z-buffer being filled with splats; :meth:`image` shades and returns RGB.
+
+    Parameters
+    ----------
+    camera : the view, at output resolution
+    supersample : render at this factor and average down (anti-aliasing)
+    """
+
+    MAX_SPLAT_RADIUS = 18  # pixels at render resolution; larger would cost too much
+
+    def __init__(self, camera: Camera, supersample: int = 2):
+        self.out_size = (camera.width, camera.height)
+        self.ss = int(supersample)
+        self.cam = camera.scaled(self.ss)
+        self.w, self.h = self.cam.width, self.cam.height
+        n = self.w * self.h
+        self.depth = np.full(n, np.inf, np.float32)
+        self.albedo = np.zeros((n, 3), np.float32)
+        self.normal = np.zeros((n, 3), np.float32)
+        self.lit = np.zeros(n, bool)
+
+    # ------------------------------------------------------------------ drawing
+    def points(self, points, colors, normals=None, size: float | None = None,
+               radius_px: int | None = None, lit: bool = True) -> None:
+        """Splat (N, 3) ``points`` with colours (N, 3) or (3,) uint8.
+
+        ``size``: the sample spacing in metres (the splat covers about that much surface);
+        or ``radius_px``: a fixed radius in output pixels. ``normals`` (N, 3) are flipped to
+        face the camera (two-sided lighting); without normals, or with ``lit=False``, the
+        colour is drawn as is.
+        """
+        pts = np.asarray(points, float)
+        if len(pts) == 0:
+            return
+        cols = np.broadcast_to(np.asarray(colors, np.float32) / 255.0, (len(pts), 3))
+        px, py, z = self.cam.project(pts)
+        keep = (z > self.cam.near) & (px > -50) & (px < self.w + 50) & (py > -50) & \
+            (py < self.h + 50) & np.isfinite(px) & np.isfinite(py)
+        if not keep.any():
+            return
+        idx = np.flatnonzero(keep)
+        px, py, z = px[idx], py[idx], z[idx]
+        if radius_px is not None:
+            rad = np.full(len(idx), int(radius_px) * self.ss)
+        else:
+            size = 0.01 if size is None else size
+            rad = np.rint(0.5 * size * self.cam.focal / z).astype(int)
+            rad = np.clip(rad, 0, self.MAX_SPLAT_RADIUS)
+        nrm = None
+        if normals is not None and lit:
+            nrm = np.asarray(normals, float)[idx]
+            facing = np.einsum("ij,ij->i", nrm, self.cam.eye - pts[idx]) < 0
+            nrm = np.where(facing[:, None], -nrm, nrm)
+        ix, iy = np.rint(px).astype(np.int64), np.rint(py).astype(np.int64)
+        # oriented splats: depth follows each point's tangent plane across its disk, so
+        # overlapping splats of one surface blend into a smooth surface
+        gx = gy = None
+        if nrm is not None:
+            a, b, c = nrm @ self.cam.right, nrm @ self.cam.upv, nrm @ self.cam.forward
+            c = np.where(c < 0, np.minimum(c, -0.35), np.maximum(c, 0.35))
+            gx = (-a / c * z / self.cam.focal).astype(np.float32)
+            gy = (b / c * z / self.cam.focal).astype(np.float32)
+        for r in np.unique(rad):
+            sel = np.flatnonzero(rad == r)
+            dx, dy = _disk(r)
+            step = max(1, 8_000_000 // len(dx))
+            for s in range(0, len(sel), step):
+                part = sel[s:s + step]
+                xx = (ix[part, None] + dx[None, :]).ravel()
+                yy = (iy[part, None] + dy[None, :]).ravel()
+                src = np.repeat(part, len(dx))
+                ok = (xx >= 0) & (xx < self.w) & (yy >= 0) & (yy < self.h)
+                flat = (yy[ok] * self.w + xx[ok])
+                src = src[ok]
+                d = z[src].astype(np.float32)
+                if gx is not None:
+                    ddx = np.tile(dx, len(part))[ok].astype(np.float32)
+                    ddy = np.tile(dy, len(part))[ok].astype(np.float32)
+                    d = d + gx[src] * ddx + gy[src] * ddy
+                np.minimum.at(self.depth, flat, d)
+                win = d <= self.depth[flat]
+                flat, src = flat[win], src[win]
+                self.albedo[flat] = cols[idx[src]]
+                if nrm is not None:
+                    self.normal[flat] = nrm[src]
+                    self.lit[flat] = True
+                else:
+                    self.lit[flat] = False
+
+    def lines(self, starts, ends, colors, width_px: int = 0) -> None:
+        """Draw (N, 3) segments ``starts`` -> ``ends``, unlit, with (N, 3) or (3,) colours."""
+        a, b = np.asarray(starts, float), np.asarray(ends, float)
+        if len(a) == 0:
+            return
+        cols = np.broadcast_to(np.asarray(colors), (len(a), 3))
+        pa, pb = self.cam.project(a), self.cam.project(b)
+        length = np.hypot(pa[0] - pb[0], pa[1] - pb[1])
+        steps = np.clip(np.nan_to_num(length, nan=2.0), 2, 4000).astype(int) + 1
+        seg = np.repeat(np.arange(len(a)), steps)
+        first = np.repeat(np.cumsum(steps) - steps, steps)
+        t = (np.arange(len(seg)) - first) / np.maximum(steps[seg] - 1, 1)
+        pts = a[seg] + (b[seg] - a[seg]) * t[:, None]
+        self.points(pts, cols[seg], radius_px=width_px, lit=False)
+
+    # ------------------------------------------------------------------ output
+    def project(self, points):
+        """Output-resolution pixel coordinates and depth of (N, 3) points."""
+        px, py, z = self.cam.project(points)
+        return px / self.ss, py / self.ss, z
+
+    def visible(self, points, tolerance: float) -> np.ndarray:
+        """(N,) bool: which points are inside the image and not hidden (depth test with
+        ``tolerance`` metres, looking at a 3x3 neighbourhood)."""
+        px, py, z = self.cam.project(points)
+        ix, iy = np.rint(px).astype(int), np.rint(py).astype(int)
+        inside = (ix >= 1) & (ix < self.w - 1) & (iy >= 1) & (iy < self.h - 1) & \
+            (z > self.cam.near)
+        out = np.zeros(len(z), bool)
+        d = self.depth.reshape(self.h, self.w)
+        for k in np.flatnonzero(inside):
+            window = d[iy[k] - 1:iy[k] + 2, ix[k] - 1:ix[k] + 2]
+            out[k] = z[k] <= window.max() + tolerance
+        return out
+
+    def image(self, background=BACKGROUND, edl_strength: float = 6.0,
+              edl_threshold: float = 0.05) -> np.ndarray:
+        """Shade and down-sample: (H, W, 3) uint8 at output resolution."""
+        h, w = self.h, self.w
+        depth = self.depth.reshape(h, w)
+        fg = np.isfinite(depth)
+        # Lambert: a headlight plus a key light from above, on two-sided normals
+        nrm = self.normal.reshape(h, w, 3)
+        head = -self.cam.forward
+        key = _unit(np.array([0.3, 0.5, 1.0]))
+        lam = 0.38 + 0.42 * np.clip(nrm @ head, 0, 1) + 0.28 * np.clip(nrm @ key, 0, 1)
+        shade = np.where(self.lit.reshape(h, w), np.clip(lam, 0, 1.0), 1.0)
+        # eye-dome lighting: darken pixels that lie behind their neighbours (outlines)
+        logd = np.where(fg, np.log(np.where(fg, depth, 1.0)), np.inf)
+        acc = np.zeros((h, w), np.float32)
+        s = self.ss
+        with np.errstate(invalid="ignore"):
+            for dy, dx in ((s, 0), (-s, 0), (0, s), (0, -s)):
+                nb = np.roll(np.roll(logd, dy, axis=0), dx, axis=1)
+                diff = np.where(fg & np.isfinite(nb), logd - nb, 0.0)
+                # small steps between overlapping splats of one surface are not edges
+                acc += np.clip(diff - edl_threshold, 0, None)
+        shade = shade * np.exp(-edl_strength * 10 * acc)
+        rgb = self.albedo.reshape(h, w, 3) * shade[..., None]
+        bg = np.asarray(background, np.float32) / 255.0
+        rgb = np.where(fg[..., None], rgb, bg)
+        ow, oh = self.out_size
+        rgb = rgb[:oh * s, :ow * s].reshape(oh, s, ow, s, 3).mean(axis=(1, 3))
+        return (np.clip(rgb, 0, 1) * 255 + 0.5).astype(np.uint8)
