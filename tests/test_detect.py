@@ -137,3 +137,19 @@ def test_settings_are_validated():
         it.DetectSettings(criterion="magic")
     with pytest.raises(it.SettingsError):
         it.TrainSettings(affordance_normal=(0, 0, 0))
+
+
+def test_detect_many_equals_one_at_a_time(corner_tensor):
+    from conftest import corner_example
+    q, s = corner_example()
+    # a second descriptor: the same interaction with the box turned into a 'down' tensor
+    other = it.InteractionTensor.fit(q, s, "corner-box-2", it.TrainSettings(query_points=2000, seed=4))
+    scene_geometry, _ = moved_corner_scene(0.7, np.array([0.3, 0.2, 0.0]))
+    scene = it.prepare_scene(scene_geometry, 0.01, seed=8)
+    settings = it.DetectSettings(sample_fraction=0.06, seed=2)
+    many = it.detect_many(scene, [corner_tensor, other], settings)
+    for tensor, res in zip([corner_tensor, other], many):
+        one = it.detect(scene, tensor, settings)
+        np.testing.assert_array_equal(one.pairs.accepted, res.pairs.accepted)
+        np.testing.assert_array_equal(one.pairs.score, res.pairs.score)
+        assert [p.point_index for p in one.predictions] == [p.point_index for p in res.predictions]

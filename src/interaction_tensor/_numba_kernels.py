@@ -59,28 +59,10 @@ def nearest(qx, qy, qz, pts, starts, ox, oy, oz, cell, nx, ny, nz):
                     dk += step
     return besti
 
-@njit(cache=True, inline="always")
-def cached_nearest(qx, qy, qz, pts, starts, ox, oy, oz, cell, nx, ny, nz,
-                   cache_arr, co, ch, cd):
-    # nearest sample of the centre of q's cache cell (computed once per cell)
-    i = int(math.floor((qx - co[0]) / ch))
-    j = int(math.floor((qy - co[1]) / ch))
-    k = int(math.floor((qz - co[2]) / ch))
-    if i < 0 or j < 0 or k < 0 or i >= cd[0] or j >= cd[1] or k >= cd[2]:
-        return nearest(qx, qy, qz, pts, starts, ox, oy, oz, cell, nx, ny, nz)
-    c = (i * cd[1] + j) * cd[2] + k
-    p = cache_arr[c]
-    if p < 0:
-        p = nearest(co[0] + (i + 0.5) * ch, co[1] + (j + 0.5) * ch, co[2] + (k + 0.5) * ch,
-                    pts, starts, ox, oy, oz, cell, nx, ny, nz)
-        cache_arr[c] = p
-    return p
-
 @njit(cache=True, parallel=True, fastmath=False)
 def score(tp, orient, offsets, prov, pnorm, weights, ang_lim, big_w, max_terms, rest,
           criterion, c, a, wsum, threshold, early_exit, surface, rho,
-          pts, nrm, starts, origin, cell, dims, out_score, out_acc, out_at, out_cmp,
-          use_cache, cache_arr, co, ch, cd):
+          pts, nrm, starts, origin, cell, dims, out_score, out_acc, out_at, out_cmp):
     n_pairs = tp.shape[0]
     nk = offsets.shape[1]
     ox, oy, oz = origin[0], origin[1], origin[2]
@@ -97,11 +79,7 @@ def score(tp, orient, offsets, prov, pnorm, weights, ang_lim, big_w, max_terms, 
             qx = tp[i, 0] + offsets[o, k, 0]
             qy = tp[i, 1] + offsets[o, k, 1]
             qz = tp[i, 2] + offsets[o, k, 2]
-            if use_cache:
-                p = cached_nearest(qx, qy, qz, pts, starts, ox, oy, oz, cell, nx, ny, nz,
-                                   cache_arr, co, ch, cd)
-            else:
-                p = nearest(qx, qy, qz, pts, starts, ox, oy, oz, cell, nx, ny, nz)
+            p = nearest(qx, qy, qz, pts, starts, ox, oy, oz, cell, nx, ny, nz)
             vx = pts[p, 0] - qx
             vy = pts[p, 1] - qy
             vz = pts[p, 2] - qz

@@ -160,7 +160,7 @@ def _score_all(scene, jobs, backend, grid, settings, progress, label):
         if backend == "numba":
             batch = [ScoreJob(scene.points[j.points[sl]], j.orient[sl], j.table, j.threshold, j.vectors,
                               j.rho, j.early_exit) for j in jobs]
-            for i, (s, a, d, c) in enumerate(score_jobs(batch, grid, settings.nn_cache)):
+            for i, (s, a, d, c) in enumerate(score_jobs(batch, grid)):
                 totals[i][sl], acc[i][sl], at[i][sl] = s, a, d
                 cmp_[i] += int(c.sum())
         else:
@@ -209,7 +209,6 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
         "mean_comparisons_per_decision": float(decided.mean()) if len(decided) else 0.0,
         "threshold": threshold,
         "backend": backend,
-        "nn_cache": settings.nn_cache,
         "seconds": {k: round(v, 4) for k, v in timings.items()},
         "test_points_per_second": (float(len(test_idx) / timings["scoring"])
                                    if timings.get("scoring", 0) > 0 else None),
@@ -222,9 +221,9 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
                 progress: bool = False) -> list:
     """Detect several interactions in one pass over a scene.
 
-    The test points, the scene index and (with ``settings.nn_cache``) the nearest-neighbour
-    cache are shared by all descriptors; each gets its own candidates (its N_aff), threshold
-    and :class:`Detection`.
+    The test points and the scene index are shared by all descriptors; each gets its own
+    candidates (its N_aff), threshold and :class:`Detection`, identical to what
+    :func:`detect` gives for it alone.
     """
     settings = settings or DetectSettings()
     t0 = time.perf_counter()

@@ -17,8 +17,6 @@ import numpy as np
 _KERNELS = None
 #: Largest number of grid cells (dense start table, 8 bytes each).
 MAX_CELLS = 20_000_000
-#: Largest nearest-neighbour cache of one tile (int32 entries).
-MAX_CACHE_CELLS = 8_000_000
 
 
 def available() -> bool:
@@ -116,64 +114,28 @@ def _job_args(job: ScoreJob, grid: Grid) -> tuple:
             grid.dims)
 
 
-def score_jobs(jobs: list, grid: Grid, cache_cell: float | None = None) -> list:
+def score_jobs(jobs: list, grid: Grid) -> list:
     """Score several jobs (e.g. several affordances) over one scene grid.
 
-    With ``cache_cell`` None every nearest neighbour is exact and the results are identical
-    to :func:`interaction_tensor.scoring.score_pairs`. With ``cache_cell`` h, a keypoint uses
-    the nearest sample of the centre of its h-sized cell, found once and shared by every
-    keypoint of every job that falls in that cell (the authors' agglomerative descriptor);
-    the vector is still measured from the keypoint itself. The pairs are processed in cubic
-    tiles so that each tile's cache stays small.
-
-    Returns, per job, (score, accepted, decided_at, comparisons) arrays over its pairs.
+    Every nearest neighbour is exact: the results are identical to
+    :func:`interaction_tensor.scoring.score_pairs`. Returns, per job, (score, accepted,
+    decided_at, comparisons) arrays over its pairs.
     """
     k = _compile()
-    outs, args = [], []
+    outs = []
     for job in jobs:
         p = len(job.points)
-        job.points = np.ascontiguousarray(job.points, dtype=np.float64)
-        job.orient = np.ascontiguousarray(job.orient, np.int64)
-        outs.append((np.zeros(p), np.zeros(p, np.bool_), np.zeros(p, np.int64),
-                     np.zeros(p, np.int64)))
-        args.append(_job_args(job, grid))
-    if not cache_cell:
-        for job, a, o in zip(jobs, args, outs):
-            if len(job.points):
-                k["score"](job.points, job.orient, *a, *o, False, np.full(1, -1, np.int32),
-                           np.zeros(3), 1.0, np.ones(3, np.int64))
-        return outs
-    reach = max(float(np.abs(j.table.offsets).max()) for j in jobs) + cache_cell
-    tile = max(0.1, (MAX_CACHE_CELLS ** (1 / 3)) * cache_cell - 2 * reach)
-    all_points = np.vstack([j.points for j in jobs])
-    if len(all_points) == 0:
-        return outs
-    keys = np.floor(all_points / tile).astype(np.int64)
-    uniq, tile_of = np.unique(keys, axis=0, return_inverse=True)
-    tile_of = tile_of.ravel()
-    starts = np.cumsum([0] + [len(j.points) for j in jobs])
-    for t in range(len(uniq)):
-        members = tile_of == t
-        tp_all = all_points[members]
-        co = tp_all.min(axis=0) - reach
-        cd = np.ceil((tp_all.max(axis=0) + reach - co) / cache_cell).astype(np.int64) + 1
-        cache_arr = np.full(int(np.prod(cd)), -1, np.int32)
-        for j, (job, a, o) in enumerate(zip(jobs, args, outs)):
-            sel = np.flatnonzero(members[starts[j]:starts[j + 1]])
-            if len(sel) == 0:
-                continue
-            res = (np.empty(len(sel)), np.empty(len(sel), np.bool_),
-                   np.empty(len(sel), np.int64), np.empty(len(sel), np.int64))
-            k["score"](job.points[sel], job.orient[sel], *a, *res, True, cache_arr, co,
-                       float(cache_cell), cd)
-            for dst, src in zip(o, res):
-                dst[sel] = src
+        out = (np.zeros(p), np.zeros(p, np.bool_), np.zeros(p, np.int64), np.zeros(p, np.int64))
+        if p:
+            k["score"](np.ascontiguousarray(job.points, dtype=np.float64),
+                       np.ascontiguousarray(job.orient, np.int64), *_job_args(job, grid), *out)
+        outs.append(out)
     return outs
 
 
 def score_pairs_numba(points, orient, table, grid: Grid, threshold: float, vectors: str,
-                      rho: float, early_exit: bool = True, cache_cell: float | None = None):
+                      rho: float, early_exit: bool = True):
     """Numba version of :func:`interaction_tensor.scoring.score_pairs` (one job of
     :func:`score_jobs`). Returns score, accepted, decided_at, comparisons-per-pair arrays."""
     job = ScoreJob(points, orient, table, threshold, vectors, rho, early_exit)
-    return score_jobs([job], grid, cache_cell)[0]
+    return score_jobs([job], grid)[0]

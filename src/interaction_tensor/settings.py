@@ -116,10 +116,6 @@ class DetectSettings:
     #: ``auto``: the Numba kernel when Numba imports, else ``numpy``; ``numpy`` is the plain
     #: vectorised path over SciPy's cKDTree; ``torch``: a CUDA device through PyTorch.
     backend: str = "auto"
-    #: Cell (m) of the shared nearest-neighbour cache of the Numba backend: a keypoint uses
-    #: the nearest sample of its cell's centre (the authors' agglomerative descriptor shares
-    #: one query per 1 cm cell). Approximate; None (default) keeps every query exact.
-    nn_cache: float | None = None
     #: Seed of the test-point draw and of scene sampling.
     seed: int = 0
 
@@ -138,7 +134,6 @@ class DetectSettings:
         _check(self.scene_spacing is None or self.scene_spacing > 0,
                "scene_spacing must be positive (metres)")
         _check(self.backend in BACKENDS, f"backend must be one of {BACKENDS}")
-        _check(self.nn_cache is None or self.nn_cache > 0, "nn_cache must be positive (metres)")
         _check(self.batch_size >= 1 and self.max_scene_points >= 100,
                "batch_size and max_scene_points must be positive")
 
