@@ -61,6 +61,8 @@ def test_train_info_detect(files, descriptor):
                 "keypoint_comparisons", "seconds"):
         assert key in doc["stats"]
     assert doc["accepted"]["count"] == len(doc["accepted"]["score"])
+    assert all(1 <= c <= 512 for c in doc["accepted"]["comparisons_to_decision"])
+    assert doc["stats"]["mean_comparisons_to_accept"] <= 512
     assert (out / "heatmap.ply").stat().st_size > 0
     header = (out / "heatmap.ply").read_bytes()[:400].decode("ascii", "replace")
     assert "property float score" in header and "property uchar red" in header

@@ -325,8 +325,14 @@ def _register_viz(sub) -> None:
     register(sub)
 
 
+def _register_eval(sub) -> None:
+    from .cli_eval import register
+
+    register(sub)
+
+
 #: Functions that add further subcommands: ``register(subparsers)``.
-_EXTENSIONS: list = [_register_viz]
+_EXTENSIONS: list = [_register_viz, _register_eval]
 
 
 def main(argv=None) -> int:

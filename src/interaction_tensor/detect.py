@@ -207,6 +207,10 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
         "keypoint_comparisons": int(pairs.comparisons),
         "keypoint_comparisons_to_decision": int(decided.sum()),
         "mean_comparisons_per_decision": float(decided.mean()) if len(decided) else 0.0,
+        "mean_comparisons_to_accept": (float(decided[pairs.accepted].mean())
+                                       if pairs.accepted.any() else None),
+        "mean_comparisons_to_reject": (float(decided[~pairs.accepted].mean())
+                                       if (~pairs.accepted).any() else None),
         "threshold": threshold,
         "backend": backend,
         "seconds": {k: round(v, 4) for k, v in timings.items()},

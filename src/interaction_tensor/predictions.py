@@ -115,10 +115,11 @@ def export(detection, outdir, scene_name: str | None = None,
     acc = det.accepted
     accepted = {
         "count": int(len(acc)),
-        "columns": ["point_index", "orientation_index", "score"],
+        "columns": ["point_index", "orientation_index", "score", "comparisons_to_decision"],
         "point_index": det.pair_point[acc].tolist(),
         "orientation_index": det.pair_orientation[acc].tolist(),
         "score": [round(float(s), 6) for s in det.pairs.score[acc]],
+        "comparisons_to_decision": det.pairs.decided_at[acc].tolist(),
     }
     doc = {
         "scene": scene_name or det.scene.source,

@@ -67,20 +67,27 @@ def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = Non
     return normals
 
 
-def mean_spacing(points: np.ndarray, tree: cKDTree | None = None, sample: int = 20000,
+def mean_spacing(points: np.ndarray, tree: cKDTree | None = None, sample: int = 2000,
                  seed: int = 0) -> float:
-    """Median distance (m) from a point to its nearest distinct neighbour, on a random subset.
+    """Sampling spacing (m) of a surface point cloud: 1 / sqrt(points per square metre).
 
-    Duplicated points (common in scans and converted clouds) are skipped.
+    The same meaning as the spacing at which meshes are sampled (count = area / spacing^2).
+    The density is the median number of neighbours within a disk of a few nearest-neighbour
+    distances, over a random subset; duplicated points (common in scans and converted clouds)
+    do not count.
     """
-    tree = cKDTree(points) if tree is None else tree
     rng = np.random.default_rng(seed)
-    idx = rng.choice(len(points), size=min(sample, len(points)), replace=False)
-    k = min(8, len(points))
-    d, _ = tree.query(points[idx], k=k, workers=-1)
-    d = np.where(d > 1e-9, d, np.inf).min(axis=1)
-    d = d[np.isfinite(d)]
-    return float(np.median(d)) if len(d) else 0.0
+    unique = np.unique(np.round(points / 1e-6).astype(np.int64), axis=0) * 1e-6
+    if len(unique) < 3:
+        return 0.0
+    utree = cKDTree(unique) if (tree is None or len(unique) != len(points)) else tree
+    idx = rng.choice(len(unique), size=min(sample, len(unique)), replace=False)
+    d, _ = utree.query(unique[idx], k=2, workers=-1)
+    radius = 8.0 * float(np.median(d[:, 1]))
+    counts = np.asarray(utree.query_ball_point(unique[idx], radius, return_length=True,
+                                               workers=-1))
+    density = np.median(counts) / (np.pi * radius ** 2)
+    return float(1.0 / np.sqrt(density)) if density > 0 else float(np.median(d[:, 1]))
 
 
 def weighted_keypoints(weights: np.ndarray, n: int, seed) -> np.ndarray:

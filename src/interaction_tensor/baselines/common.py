@@ -1,0 +1,48 @@
+"""What both baselines share: candidate placements and the result type."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass
+class BaselineResult:
+    """Scores of (candidate point, orientation) pairs by a baseline.
+
+    Attributes
+    ----------
+    pair_point : (P,) scene index of each pair's test point
+    pair_orientation : (P,) orientation index (angle i * 2 pi / n about +Z)
+    score : (P,) ICP fitness in [0, 1]
+    accepted : (P,) score >= threshold
+    poses : (P, 4, 4) the pose the baseline proposes (Naive: after ICP; BS: the initial pose)
+    threshold : the acceptance threshold (the example's own fitness)
+    seconds : wall time of the scoring
+    """
+
+    pair_point: np.ndarray
+    pair_orientation: np.ndarray
+    score: np.ndarray
+    accepted: np.ndarray
+    poses: np.ndarray
+    threshold: float
+    seconds: float
+
+
+def capped_candidates(candidates: np.ndarray, cap: int | None, seed: int = 0) -> np.ndarray:
+    """A seeded random subset of at most ``cap`` candidate indices (sorted)."""
+    candidates = np.asarray(candidates, np.int64)
+    if cap is None or len(candidates) <= cap:
+        return candidates
+    rng = np.random.default_rng(seed)
+    return np.sort(rng.choice(candidates, cap, replace=False))
+
+
+def local_points(scene, centre, radius: float, cap: int, seed: int = 0) -> np.ndarray:
+    """Scene points within ``radius`` of ``centre``, at most ``cap`` (seeded subset)."""
+    idx = np.asarray(scene.tree.query_ball_point(centre, radius), np.int64)
+    if len(idx) > cap:
+        idx = np.random.default_rng(seed).choice(idx, cap, replace=False)
+    return scene.points[idx]

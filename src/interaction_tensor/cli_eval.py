@@ -1,0 +1,159 @@
+"""``itensor examples`` and ``itensor evaluate``: the paper's examples and its experiments.
+
+Registered in :mod:`interaction_tensor.cli` through ``register(subparsers)``; until then (or
+stand-alone) ``python -m interaction_tensor.cli_eval ...`` runs the same commands.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from .cli import _fraction
+from .errors import InputError
+
+
+def _positive_int(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
+    return value
+
+
+def _objects_dir(path):
+    if path is None:
+        return None
+    p = Path(path)
+    if not p.is_dir():
+        raise InputError(p, "objects directory not found")
+    return str(p)
+
+
+def _examples(names):
+    from .examples import interactions
+
+    if not names:
+        return ()
+    out = []
+    for n in names:
+        out += [s for s in n.split(",") if s]
+    for n in out:
+        interactions.spec(n)          # InputError for unknown names
+    return tuple(out)
+
+
+def cmd_examples_list(args) -> int:
+    from .examples import interactions
+
+    for name, sp in interactions.EXAMPLES.items():
+        normal = "down" if sp.normal[2] < 0 else "up"
+        real = sp.real_query or "-"
+        print(f"{name:<16} {sp.affordance:<8} N_aff {normal:<4}  real query: {real:<24} "
+              f"{sp.description}")
+    return 0
+
+
+def cmd_examples_build(args) -> int:
+    from .examples import interactions
+    from .io import write_json, write_mesh, write_ply_points
+
+    out = Path(args.output)
+    if out.exists() and not out.is_dir():
+        raise InputError(out, "exists and is not a directory")
+    out.mkdir(parents=True, exist_ok=True)
+    objects = _objects_dir(args.objects)
+    names = _examples(args.examples) or interactions.names()
+    listing = []
+    for n in names:
+        ex = interactions.build(n, objects, args.seed, real_scene_object=args.real_scene_objects)
+        tensor = interactions.build_descriptor(n, seed=args.seed, spacing=args.spacing,
+                                               example=ex)
+        tensor.save(out / f"{n}.npz")
+        for kind, g in (("query", ex.query), ("scene_object", ex.scene_object)):
+            if g.is_mesh:
+                write_mesh(out / f"{n}_{kind}.ply", g.vertices, g.faces)
+            else:
+                write_ply_points(out / f"{n}_{kind}.ply", g.vertices)
+        listing.append({"example": n, "affordance": ex.spec.affordance,
+                        "affordance_normal": list(ex.spec.normal),
+                        "query": ex.query.source, "scene_object": ex.scene_object.source,
+                        "descriptor": f"{n}.npz", "threshold": tensor.threshold(),
+                        "self_score": tensor.self_scores["paper-weighted"]})
+        if not args.quiet:
+            print(f"{n:<16} -> {out / (n + '.npz')} (query: {ex.query.source}; threshold "
+                  f"{tensor.threshold():.3f})")
+    write_json(out / "examples.json", listing)
+    return 0
+
+
+def cmd_evaluate(args) -> int:
+    from .evaluation.runner import METHODS, EvalSettings, evaluate
+
+    methods = tuple(args.methods.split(",")) if args.methods else METHODS
+    st = EvalSettings(examples=_examples(args.examples), objects_dir=_objects_dir(args.objects),
+                      test_points=args.test_points, sample_fraction=args.sample_fraction,
+                      max_candidates=args.max_candidates,
+                      max_bs_candidates=args.max_bs_candidates, methods=methods,
+                      pictures=not args.no_pictures, seed=args.seed, spacing=args.spacing)
+    log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
+    res = evaluate(list(args.scenes), args.output, st, log)
+    if not args.quiet:
+        from .evaluation.report import table_markdown
+
+        print(table_markdown(res.table, methods))
+        print(f"wrote {args.output}/table1.md, table1.csv, sampling.md/.csv/.png, timings.md, "
+              f"judgements.csv, pictures/ in {res.settings['total_seconds']} s")
+    return 0
+
+
+def register(sub) -> None:
+    """Add ``examples`` and ``evaluate`` to the ``itensor`` subparsers."""
+    p = sub.add_parser("examples", help="the paper's 8 interaction examples")
+    esub = p.add_subparsers(dest="examples_command", metavar="ACTION", required=True)
+    q = esub.add_parser("list", help="list the examples")
+    q.set_defaults(func=cmd_examples_list)
+    q = esub.add_parser("build", help="pose every example and write one descriptor each")
+    q.add_argument("-o", "--output", required=True, help="output directory")
+    q.add_argument("--objects", default=None,
+                   help="directory of real query objects (e.g. ../shared/data/objects)")
+    q.add_argument("--real-scene-objects", action="store_true",
+                   help="also use real scene-objects from --objects (sitting: stool.ply)")
+    q.add_argument("--examples", nargs="*", help="only these examples")
+    q.add_argument("--spacing", type=float, default=0.01, help="scene-object spacing (m)")
+    q.add_argument("--seed", type=int, default=0)
+    q.add_argument("-q", "--quiet", action="store_true")
+    q.set_defaults(func=cmd_examples_build)
+
+    p = sub.add_parser("evaluate", help="reproduce the paper's experiments on scenes")
+    p.add_argument("--scenes", nargs="+", required=True,
+                   help="scene files or directories (metres, +Z up)")
+    p.add_argument("-o", "--output", required=True, help="output directory")
+    p.add_argument("--examples", nargs="*", help="only these examples (default: all 8)")
+    p.add_argument("--objects", default=None, help="directory of real query objects")
+    p.add_argument("--methods", default=None,
+                   help="comma-separated subset of iT-weighted,iT-uniform,Naive,BS")
+    p.add_argument("--test-points", type=_positive_int, default=2000,
+                   help="test points drawn per scene (sample fraction = this / scene points)")
+    p.add_argument("--sample-fraction", type=_fraction, default=None,
+                   help="fixed fraction of scene points as test points (overrides --test-points)")
+    p.add_argument("--max-candidates", type=_positive_int, default=16,
+                   help="candidates scored by the Naive baseline per (example, scene)")
+    p.add_argument("--max-bs-candidates", type=_positive_int, default=6,
+                   help="candidates scored by the BS baseline per (example, scene)")
+    p.add_argument("--spacing", type=float, default=0.01, help="sampling spacing (m)")
+    p.add_argument("--no-pictures", action="store_true")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("-q", "--quiet", action="store_true")
+    p.set_defaults(func=cmd_evaluate)
+
+
+def main(argv=None) -> int:
+    """``python -m interaction_tensor.cli_eval`` is ``itensor`` (these commands included)."""
+    from .cli import main as itensor_main
+
+    return itensor_main(argv)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,194 @@
+"""Tables (Markdown, CSV), the sampling plot and the per-scene pictures of an evaluation."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .runner import AFFORDANCES, METHODS, PAPER, machine, write_csv, write_json
+
+
+def _mpl():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _fmt(v) -> str:
+    return "n/a" if v is None or (isinstance(v, float) and np.isnan(v)) else f"{v:.1f}"
+
+
+def table_markdown(rows: list[dict], methods=METHODS) -> str:
+    """Table 1 as Markdown: one line per affordance, accuracy / F-score / precision per method."""
+    affs = [a for a in list(AFFORDANCES) + ["average"] if any(r["affordance"] == a for r in rows)]
+    methods = [m for m in methods if any(r["method"] == m for r in rows)]
+    head = "| affordance | " + " | ".join(f"{m} acc | {m} F | {m} prec" for m in methods) + " |"
+    lines = [head, "|---|" + "---:|" * (3 * len(methods))]
+    for a in affs:
+        cells = []
+        for m in methods:
+            r = next((r for r in rows if r["affordance"] == a and r["method"] == m), None)
+            cells += [_fmt(r["accuracy"]), _fmt(r["f_score"]), _fmt(r["precision"])] if r else \
+                ["", "", ""]
+        name = f"**{a}**" if a == "average" else a
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def paper_markdown() -> str:
+    lines = ["| affordance | iT acc | iT F | Naive acc | Naive F | BS acc | BS F |",
+             "|---|---:|---:|---:|---:|---:|---:|"]
+    for a, d in PAPER.items():
+        lines.append(f"| {a} | " + " | ".join(f"{d[m][0]:.2f} | {d[m][1]:.2f}"
+                                               for m in ("iT", "Naive", "BS")) + " |")
+    return "\n".join(lines)
+
+
+def sampling_rows(sampling: list[dict]) -> list[dict]:
+    """Per affordance (and all): mean comparisons to accept, weight-driven vs uniform."""
+    out = []
+    affs = [a for a in AFFORDANCES if any(s["affordance"] == a for s in sampling)] + ["all"]
+    for a in affs:
+        row = {"affordance": a}
+        for kp in ("weighted", "uniform"):
+            ss = [s for s in sampling if (a == "all" or s["affordance"] == a)
+                  and s["keypoints"] == kp]
+            acc = sum(s["accepted"] for s in ss)
+            row[f"{kp}_accepted"] = acc
+            row[f"{kp}_mean"] = (sum(s["comparisons_to_accept_sum"] for s in ss) / acc
+                                 if acc else float("nan"))
+            a20 = sum(s["accepted_top20"] for s in ss)
+            row[f"{kp}_top20_mean"] = (sum(s["comparisons_to_accept_top20_sum"] for s in ss)
+                                       / a20 if a20 else float("nan"))
+        w, u = row["weighted_mean"], row["uniform_mean"]
+        row["uniform_extra_percent"] = 100.0 * (u - w) / w if w and w == w and u == u else float("nan")
+        out.append(row)
+    return out
+
+
+def write_all(res, out: Path) -> None:
+    out = Path(out)
+    rows = res.table
+    write_csv(out / "table1.csv", rows, ["affordance", "method", "accuracy", "f_score"])
+    write_csv(out / "table1_detailed.csv", rows,
+              ["affordance", "method", "accuracy", "f_score", "precision", "tp", "fp", "tn", "fn"])
+    judg = [{k: v for k, v in j.items() if not k.startswith("_")} for j in res.judgements]
+    write_csv(out / "judgements.csv", judg,
+              ["scene", "example", "affordance", "method", "group", "rank", "score", "accepted",
+               "valid", "x", "y", "z", "penetration_m", "contact", "reasons"])
+    # per-example precision of the top 5, for the discussion
+    per_ex = []
+    for ex in sorted({j["example"] for j in judg}):
+        row = {"example": ex}
+        for m in METHODS:
+            tops = [j for j in judg if j["example"] == ex and j["method"] == m and j["group"] == "top"]
+            row[m] = 100.0 * sum(j["valid"] for j in tops) / len(tops) if tops else float("nan")
+        per_ex.append(row)
+    write_csv(out / "top5_valid_per_example.csv", per_ex, ["example"] + list(METHODS))
+
+    samp = sampling_rows(res.sampling)
+    cols = ["affordance", "weighted_accepted", "weighted_mean", "weighted_top20_mean",
+            "uniform_accepted", "uniform_mean", "uniform_top20_mean", "uniform_extra_percent"]
+    write_csv(out / "sampling.csv", samp, cols)
+    lines = ["| affordance | accepted (weighted) | comparisons to accept, weighted | top 20 % | "
+             "accepted (uniform) | comparisons to accept, uniform | top 20 % | uniform extra |",
+             "|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for r in samp:
+        lines.append(f"| {r['affordance']} | {r['weighted_accepted']} | {_fmt(r['weighted_mean'])} | "
+                     f"{_fmt(r['weighted_top20_mean'])} | {r['uniform_accepted']} | "
+                     f"{_fmt(r['uniform_mean'])} | {_fmt(r['uniform_top20_mean'])} | "
+                     f"{_fmt(r['uniform_extra_percent'])} % |")
+    (out / "sampling.md").write_text(
+        "# Sampling experiment: keypoint comparisons needed to reach the acceptance threshold\n\n"
+        "Mean over accepted (test point, orientation) pairs of the keypoints compared before "
+        "the running score reached the threshold (512 keypoints per set, compared in weight "
+        "order).\n\n" + "\n".join(lines) + "\n")
+    sampling_plot(samp, out / "sampling.png")
+
+    # timings
+    write_csv(out / "timings.csv", res.timings,
+              ["stage", "example", "scene", "method", "seconds", "candidates", "pairs",
+               "accepted", "judge_seconds"])
+    tl = ["| method | seconds (scoring) | pairs scored | pairs per second | seconds judging |",
+          "|---|---:|---:|---:|---:|"]
+    for m in METHODS:
+        ts = [t for t in res.timings if t["stage"] == "detect" and t["method"] == m]
+        if ts:
+            s = sum(t["seconds"] for t in ts)
+            p = sum(t["pairs"] for t in ts)
+            tl.append(f"| {m} | {s:.1f} | {p} | {p / s if s else 0:.0f} | "
+                      f"{sum(t['judge_seconds'] for t in ts):.1f} |")
+    train = sum(t["seconds"] for t in res.timings if t["stage"] == "train")
+    prep = sum(t["seconds"] for t in res.timings if t["stage"] == "scene")
+    (out / "timings.md").write_text(
+        "# Wall time per method\n\n" + "\n".join(tl) +
+        f"\n\nTraining (8 descriptors and judges): {train:.1f} s; scene preparation "
+        f"(detector sampling + judge sampling): {prep:.1f} s; whole run: "
+        f"{res.settings.get('total_seconds')} s on {machine()}. Naive and BS score a capped "
+        "subset of the candidates (see run.json), so compare pairs per second.\n")
+
+    md = ["# Table 1 (reproduced): validity of the top and bottom predictions, judged "
+          "automatically\n",
+          "Accuracy, F-score and precision in %, per affordance (definitions in "
+          "`interaction_tensor/evaluation/runner.py`).\n", table_markdown(rows), "",
+          "## The paper's Table 1 (human markers)\n", paper_markdown(), ""]
+    (out / "table1.md").write_text("\n".join(md) + "\n")
+    write_json(out / "run.json", {"settings": res.settings, "machine": machine()})
+
+
+def sampling_plot(samp: list[dict], path: Path) -> None:
+    plt = _mpl()
+    rows = [r for r in samp]
+    x = np.arange(len(rows))
+    fig, ax = plt.subplots(figsize=(7, 3.6), dpi=110)
+    ax.bar(x - 0.2, [r["weighted_mean"] for r in rows], 0.4, label="weight-driven")
+    ax.bar(x + 0.2, [r["uniform_mean"] for r in rows], 0.4, label="uniform")
+    ax.set_xticks(x, [r["affordance"] for r in rows])
+    ax.set_ylabel("keypoint comparisons to accept")
+    ax.set_title("Comparisons needed to reach the acceptance threshold (mean)")
+    ax.axhline(512, color="grey", lw=0.8, ls=":")
+    ax.legend(frameon=False)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+
+
+def picture(path: Path, scene, detection, tensor, top_rows: list[dict], title: str) -> None:
+    """Top-down view: scene points (grey, darker = higher), the heat map (accepted points
+    coloured by score), and the judged top predictions (posed query object outline; green
+    valid, red invalid, numbered by rank)."""
+    plt = _mpl()
+    pts = scene.points
+    rng = np.random.default_rng(0)
+    show = rng.choice(len(pts), min(len(pts), 60000), replace=False)
+    order = show[np.argsort(pts[show, 2])]
+    fig, ax = plt.subplots(figsize=(6.4, 6.4), dpi=100)
+    ax.scatter(pts[order, 0], pts[order, 1], c=pts[order, 2], cmap="Greys", s=0.3, vmin=-0.5,
+               linewidths=0)
+    hot = np.flatnonzero(detection.heat > 0)
+    if len(hot):
+        sc = ax.scatter(pts[hot, 0], pts[hot, 1], c=detection.heat[hot], cmap="inferno", s=2,
+                        linewidths=0)
+        fig.colorbar(sc, ax=ax, fraction=0.035, pad=0.01, label="iT score (accepted)")
+    q = tensor.query_vertices
+    if len(q) > 3000:
+        q = q[rng.choice(len(q), 3000, replace=False)]
+    for r in top_rows:
+        pose = r["_pose"]
+        qp = q @ pose[:3, :3].T + pose[:3, 3]
+        col = "tab:green" if r["valid"] else "tab:red"
+        ax.scatter(qp[:, 0], qp[:, 1], s=0.5, c=col, linewidths=0)
+        ax.annotate(str(r["rank"]), (r["x"], r["y"]), color=col, fontsize=9, weight="bold")
+    ax.set_aspect("equal")
+    ax.set_title(title + "  (top 5 of iT-weighted: green valid, red invalid)", fontsize=8)
+    ax.set_xlabel("x (m)")
+    ax.set_ylabel("y (m)")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)

@@ -1,0 +1,313 @@
+"""The benchmark: every example on every scene with iT (weight-driven and uniform keypoints),
+Naive and BS; the judge; Table 1; the sampling experiment; pictures; wall times.
+
+Protocol (after the paper's human-marker protocol, section 4.2):
+
+* For each (method, example, scene) the method scores (test point, orientation) pairs on the
+  same candidates: a seeded random set of ``test_points`` scene points (the sample fraction is
+  ``test_points / scene points``), kept when their normal line is within 15 degrees of N_aff.
+  iT scores every candidate; Naive and BS, whose ICP per pair is 10-50 x slower, score a
+  seeded random subset of at most ``max_candidates`` (Naive) and ``max_bs_candidates`` (BS)
+  of the same candidates, in all 8 orientations.
+* **Top 5**: the 5 best-scored pairs after spatial non-maximum suppression (radius d_o / 2),
+  accepted pairs first (a method that accepts fewer than 5 still shows its 5 best).
+  **Bottom 5**: the 5 worst-scored pairs among the others, with the same suppression
+  (fewer when the suppression leaves fewer places, as for BS with few candidates). (iT's rejected pairs
+  keep the partial score at which the early exit rejected them, a lower bound.)
+* The judge (:mod:`.judge`) labels each of these 10 poses valid or invalid.
+* Top predictions are the method's positives, bottom ones its negatives: TP = top and valid,
+  FP = top and invalid, TN = bottom and invalid, FN = bottom and valid. Per affordance, over
+  its examples and scenes: **accuracy** = (TP + TN) / (TP + FP + TN + FN), **F-score** =
+  2 TP / (2 TP + FP + FN), and **precision** = TP / (TP + FP). The average row is the mean
+  over the five affordances (as the paper's Table 1). The paper's own numbers fit
+  F = 2 P / (1 + P) in every row, i.e. its "accuracy" is the precision of the top
+  predictions with every bottom prediction counted as a true negative; our precision column
+  is the comparable number.
+* Sampling experiment (paper, Fig. 8): for the accepted pairs of the weight-driven and the
+  uniform keypoint sets, the keypoint comparisons needed to reach the acceptance threshold
+  (``decided_at``), mean over all accepted pairs and over the top 20 % by score.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import platform
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+
+METHODS = ("iT-weighted", "iT-uniform", "Naive", "BS")
+AFFORDANCES = ("placing", "sitting", "filling", "riding", "hanging")
+#: The paper's Table 1 (accuracy, F-score), for the report.
+PAPER = {"placing": {"iT": (96.92, 98.44), "Naive": (3.08, 5.97), "BS": (3.08, 5.97)},
+         "sitting": {"iT": (64.62, 78.50), "Naive": (64.62, 78.50), "BS": (35.38, 52.27)},
+         "filling": {"iT": (100, 100), "Naive": (100, 100), "BS": (100, 100)},
+         "riding": {"iT": (92.31, 96.00), "Naive": (92.31, 96.00), "BS": (7.69, 14.29)},
+         "hanging": {"iT": (70.77, 82.88), "Naive": (29.23, 45.24), "BS": (70.77, 82.88)},
+         "average": {"iT": (84.92, 91.17), "Naive": (57.85, 64.14), "BS": (43.38, 51.08)}}
+
+
+@dataclass
+class EvalSettings:
+    """Parameters of one evaluation run (every random step seeded by ``seed``)."""
+
+    examples: tuple = ()
+    objects_dir: str | None = None
+    spacing: float = 0.01
+    test_points: int = 2000
+    sample_fraction: float | None = None
+    max_candidates: int = 16
+    max_bs_candidates: int = 6
+    methods: tuple = METHODS
+    judge_spacing: float = 0.01
+    n_judged: int = 5
+    pictures: bool = True
+    seed: int = 0
+
+
+@dataclass
+class EvalResult:
+    judgements: list = field(default_factory=list)
+    sampling: list = field(default_factory=list)
+    timings: list = field(default_factory=list)
+    table: list = field(default_factory=list)
+    settings: dict = field(default_factory=dict)
+
+
+def scene_files(paths) -> list[Path]:
+    """PLY/OBJ/OFF/STL files among ``paths`` (files or directories), sorted by name."""
+    from ..io import MESH_SUFFIXES
+
+    out = []
+    for p in paths:
+        p = Path(p)
+        if p.is_dir():
+            out += sorted(q for q in p.iterdir() if q.suffix.lower() in MESH_SUFFIXES)
+        elif p.exists():
+            out.append(p)
+        else:
+            raise InputError(p, "no such scene file or directory")
+    if not out:
+        raise InputError(None, "no scene files (.ply, .obj, .off, .stl) found")
+    return out
+
+
+def _select(positions, key, k, radius):
+    from ..predictions import top_k
+
+    return top_k(positions, key, k, radius)
+
+
+def _pick(scene, point, score, accepted, k, radius):
+    """Indices of the top-k (accepted first) and bottom-k pairs, with suppression."""
+    pos = scene.points[point]
+    key = np.where(accepted, 10.0, 0.0) + score
+    top = _select(pos, key, k, radius)
+    rest = np.setdiff1d(np.arange(len(score)), top)
+    bottom = [int(rest[i]) for i in _select(pos[rest], -score[rest], k, radius)]
+    return top, bottom
+
+
+def evaluate(scenes, out_dir, settings: EvalSettings | None = None, log=print) -> EvalResult:
+    """Run the benchmark and write its tables, plots and pictures into ``out_dir``.
+
+    Parameters
+    ----------
+    scenes : scene files or directories of them (metres, +Z up)
+    out_dir : output directory (created)
+    settings : :class:`EvalSettings`
+    log : callable(str) for progress lines (``lambda s: None`` for quiet)
+    """
+    import interaction_tensor as it
+    from ..baselines.bisector_icp import bisector_baseline
+    from ..baselines.common import capped_candidates
+    from ..baselines.icp import resolve_backend
+    from ..baselines.naive import naive
+    from ..examples import interactions
+    from .judge import Judge, JudgeScene, JudgeSettings
+
+    st = settings or EvalSettings()
+    files = scene_files(scenes if isinstance(scenes, (list, tuple)) else [scenes])
+    names = list(st.examples) or interactions.names()
+    for n in names:
+        interactions.spec(n)
+    for m in st.methods:
+        if m not in METHODS:
+            raise InputError(None, f"unknown method {m!r}; known: {', '.join(METHODS)}")
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    icp_backend = resolve_backend("auto")
+    res = EvalResult(settings={**asdict(st), "icp_backend": icp_backend,
+                               "scenes": [f.name for f in files]})
+    t_all = time.perf_counter()
+
+    # training: one descriptor and one judge per example
+    models = {}
+    for n in names:
+        t0 = time.perf_counter()
+        ex = interactions.build(n, st.objects_dir, st.seed)
+        tensor = interactions.build_descriptor(n, seed=st.seed, spacing=st.spacing, example=ex)
+        judge = Judge.for_example(ex, JudgeSettings(spacing=st.judge_spacing, seed=st.seed))
+        models[n] = (ex, tensor, judge)
+        res.timings.append({"stage": "train", "example": n, "scene": "",
+                            "method": "iT", "seconds": round(time.perf_counter() - t0, 3)})
+        log(f"trained {n} ({'real' if ex.real_query else 'procedural'} query) "
+            f"in {time.perf_counter() - t0:.1f} s")
+
+    for f in files:
+        t0 = time.perf_counter()
+        geom = it.load_geometry(f)
+        scene = it.prepare_scene(geom, st.spacing, seed=st.seed)
+        jscene = JudgeScene(geom, st.judge_spacing, st.seed)
+        res.timings.append({"stage": "scene", "example": "", "scene": f.stem, "method": "",
+                            "seconds": round(time.perf_counter() - t0, 3)})
+        for n in names:
+            ex, tensor, judge = models[n]
+            aff = ex.spec.affordance
+            frac = st.sample_fraction or min(1.0, st.test_points / len(scene))
+            radius = 0.5 * tensor.radius
+            cand = None
+            runs = {}
+            for m in st.methods:
+                t1 = time.perf_counter()
+                if m.startswith("iT"):
+                    kp = m.split("-")[1]
+                    det = it.detect(scene, tensor, it.DetectSettings(
+                        sample_fraction=frac, keypoints=kp, top_k=st.n_judged, seed=st.seed))
+                    cand = det.candidate_indices
+                    point, orient = det.pair_point, det.pair_orientation
+                    score, acc = det.pairs.score, det.pairs.accepted
+                    poses = None
+                    da = det.pairs.decided_at[acc]
+                    sc_acc = score[acc]
+                    top20 = da[sc_acc >= np.quantile(sc_acc, 0.8)] if len(da) else da
+                    res.sampling.append({
+                        "example": n, "affordance": aff, "scene": f.stem, "keypoints": kp,
+                        "pairs": int(len(score)), "accepted": int(acc.sum()),
+                        "comparisons_to_accept_sum": int(da.sum()),
+                        "comparisons_to_accept_top20_sum": int(top20.sum()),
+                        "accepted_top20": int(len(top20)),
+                        "mean_comparisons_per_decision":
+                            det.stats["mean_comparisons_per_decision"]})
+                    if kp == "weighted":
+                        runs["heat"] = det
+                else:
+                    if cand is None:
+                        det = it.detect(scene, tensor, it.DetectSettings(
+                            sample_fraction=frac, top_k=0, seed=st.seed))
+                        cand = det.candidate_indices
+                    cap = st.max_candidates if m == "Naive" else st.max_bs_candidates
+                    sub = capped_candidates(cand, cap, st.seed)
+                    fn = naive if m == "Naive" else bisector_baseline
+                    r = fn(scene, tensor, sub, backend=icp_backend, seed=st.seed)
+                    point, orient, score, acc, poses = (r.pair_point, r.pair_orientation,
+                                                        r.score, r.accepted, r.poses)
+                secs = time.perf_counter() - t1
+                top, bottom = _pick(scene, point, score, acc, st.n_judged, radius)
+                t2 = time.perf_counter()
+                for group, idxs in (("top", top), ("bottom", bottom)):
+                    for rank, i in enumerate(idxs, 1):
+                        pose = poses[i] if poses is not None else tensor.pose(
+                            scene.points[point[i]], 2 * np.pi * orient[i] / 8)
+                        v = judge.judge(jscene, pose)
+                        res.judgements.append({
+                            "scene": f.stem, "example": n, "affordance": aff, "method": m,
+                            "group": group, "rank": rank, "score": round(float(score[i]), 4),
+                            "accepted": bool(acc[i]), "valid": bool(v.valid),
+                            "x": round(float(pose[0, 3]), 3), "y": round(float(pose[1, 3]), 3),
+                            "z": round(float(pose[2, 3]), 3),
+                            "penetration_m": round(float(v.penetration), 4),
+                            "contact": round(float(v.contact), 3),
+                            "reasons": "; ".join(v.reasons), "_pose": pose})
+                res.timings.append({"stage": "detect", "example": n, "scene": f.stem,
+                                    "method": m, "seconds": round(secs, 3),
+                                    "candidates": int(len(np.unique(point))),
+                                    "pairs": int(len(score)), "accepted": int(acc.sum()),
+                                    "judge_seconds": round(time.perf_counter() - t2, 3)})
+            if st.pictures and "heat" in runs:
+                from .report import picture
+
+                rows = [r for r in res.judgements if r["scene"] == f.stem and r["example"] == n
+                        and r["method"] == "iT-weighted" and r["group"] == "top"]
+                picture(out / "pictures" / f"{n}__{f.stem}.png", scene, runs["heat"], tensor,
+                        rows, f"{n} in {f.stem}")
+            done = [r for r in res.judgements if r["scene"] == f.stem and r["example"] == n]
+            summary = ", ".join(
+                f"{m} {sum(r['valid'] for r in done if r['method'] == m and r['group'] == 'top')}/"
+                f"{sum(1 for r in done if r['method'] == m and r['group'] == 'top')}"
+                for m in st.methods)
+            log(f"{f.stem:>14} {n:<16} valid top: {summary} "
+                f"({time.perf_counter() - t0:.0f} s into the scene)")
+    res.settings["total_seconds"] = round(time.perf_counter() - t_all, 1)
+    res.table = metrics(res.judgements, st.methods)
+    from .report import write_all
+
+    write_all(res, out)
+    return res
+
+
+def metrics(judgements, methods=METHODS) -> list[dict]:
+    """Table 1 rows: per affordance and method, accuracy, F-score and precision (%), and the
+    average over affordances (module docstring)."""
+    rows = []
+    present = [a for a in AFFORDANCES if any(j["affordance"] == a for j in judgements)]
+    for m in methods:
+        per = []
+        for a in present:
+            js = [j for j in judgements if j["affordance"] == a and j["method"] == m]
+            tp = sum(j["group"] == "top" and j["valid"] for j in js)
+            fp = sum(j["group"] == "top" and not j["valid"] for j in js)
+            tn = sum(j["group"] == "bottom" and not j["valid"] for j in js)
+            fn = sum(j["group"] == "bottom" and j["valid"] for j in js)
+            n = tp + fp + tn + fn
+            acc = 100.0 * (tp + tn) / n if n else float("nan")
+            f1 = 100.0 * 2 * tp / (2 * tp + fp + fn) if (2 * tp + fp + fn) else 0.0
+            prec = 100.0 * tp / (tp + fp) if (tp + fp) else 0.0
+            row = {"affordance": a, "method": m, "accuracy": acc, "f_score": f1,
+                   "precision": prec, "tp": tp, "fp": fp, "tn": tn, "fn": fn}
+            per.append(row)
+            rows.append(row)
+        if per:
+            rows.append({"affordance": "average", "method": m,
+                         **{k: float(np.mean([r[k] for r in per]))
+                            for k in ("accuracy", "f_score", "precision")},
+                         **{k: int(sum(r[k] for r in per)) for k in ("tp", "fp", "tn", "fn")}})
+    return rows
+
+
+def machine() -> str:
+    import os
+
+    return (f"{platform.system()} {platform.machine()}, {os.cpu_count()} CPU cores, "
+            f"Python {platform.python_version()}")
+
+
+def _json_default(o):
+    if isinstance(o, np.generic):
+        return o.item()
+    if isinstance(o, Path):
+        return str(o)
+    raise TypeError(type(o))
+
+
+def write_csv(path: Path, rows: list[dict], columns: list[str]) -> None:
+    from ..io import atomic_path
+
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
+        w = csv.DictWriter(fh, columns, extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{r[k]:.2f}" if isinstance(r.get(k), float) else r.get(k))
+                        for k in columns})
+
+
+def write_json(path: Path, obj) -> None:
+    from ..io import atomic_path
+
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(json.dumps(obj, indent=1, default=_json_default))
