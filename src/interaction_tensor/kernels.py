@@ -70,6 +70,11 @@ def build_grid(points: np.ndarray, normals: np.ndarray, cell: float) -> Grid:
 def _compile():
     global _KERNELS
     if _KERNELS is None:
+        import warnings
+
+        # numba notes an old system TBB once per process and falls back to OpenMP: not the
+        # user's concern
+        warnings.filterwarnings("ignore", message=".*TBB.*")
         from . import _numba_kernels as nk
 
         _KERNELS = {"score": nk.score, "nearest_many": nk.nearest_many}
