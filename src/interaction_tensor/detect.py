@@ -114,9 +114,6 @@ class Detection:
         """Indices into the pair arrays of accepted pairs."""
         return np.flatnonzero(self.pairs.accepted)
 
-    def angle(self, orientation_index) -> np.ndarray:
-        return 2 * np.pi * np.asarray(orientation_index) / self.settings.n_orientations
-
 
 def suppression_radius(tensor: InteractionTensor, settings: DetectSettings) -> float:
     """Top-k suppression radius (m): the setting, else the query object's width."""

@@ -46,11 +46,6 @@ class Geometry:
     def is_mesh(self) -> bool:
         return self.faces is not None and len(self.faces) > 0
 
-    def to_trimesh(self):
-        import trimesh
-
-        return trimesh.Trimesh(self.vertices, self.faces, process=False)
-
     def transformed(self, matrix: np.ndarray) -> "Geometry":
         """A copy moved by the 4x4 rigid ``matrix``."""
         m = np.asarray(matrix, dtype=float)

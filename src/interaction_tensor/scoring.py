@@ -52,10 +52,6 @@ class KeypointTable:
     def n(self) -> int:
         return self.weights.shape[0]
 
-    @property
-    def norms(self) -> np.ndarray:
-        return np.linalg.norm(self.provenance[0], axis=1)
-
 
 def rotation_z(angles: np.ndarray) -> np.ndarray:
     """(K, 3, 3) rotations about +Z (counter-clockwise) by ``angles`` (radians)."""

@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 from ..bisector import bisector_points, trim_to_sphere
-from .common import BaselineResult, local_points
+from .common import BaselineResult, candidate_poses, local_points
 from .icp import icp
 from .naive import query_samples
 
@@ -49,22 +49,14 @@ def bisector_baseline(scene, tensor, candidates: np.ndarray, n_orientations: int
     own = _bisector(q, _subsample(tensor.scene_points, local_cap, seed + 1), qc, tensor.radius,
                     seed)
     _, thr, _ = icp(ref_bs, own, np.eye(4), md, iterations, backend)
-    n = len(candidates) * n_orientations
-    point = np.repeat(np.asarray(candidates, np.int64), n_orientations)
-    orient = np.tile(np.arange(n_orientations), len(candidates))
-    score = np.zeros(n)
-    poses = np.zeros((n, 4, 4))
-    for c, ci in enumerate(candidates):
-        pos = scene.points[ci]
-        for o in range(n_orientations):
-            k = c * n_orientations + o
-            pose = tensor.pose(pos, 2 * np.pi * o / n_orientations)
-            poses[k] = pose
-            qp = q @ pose[:3, :3].T + pose[:3, 3]
-            centre = pose[:3, :3] @ qc + pose[:3, 3]
-            tgt = local_points(scene, centre, 2 * tensor.radius, local_cap, seed + k)
-            test_bs = _bisector(qp, tgt, centre, tensor.radius, seed)
-            ex_bs = ref_bs @ pose[:3, :3].T + pose[:3, 3]
-            _, score[k], _ = icp(ex_bs, test_bs, np.eye(4), md, iterations, backend)
+    point, orient, poses = candidate_poses(scene, tensor, candidates, n_orientations)
+    score = np.zeros(len(point))
+    for k, pose in enumerate(poses):
+        qp = q @ pose[:3, :3].T + pose[:3, 3]
+        centre = pose[:3, :3] @ qc + pose[:3, 3]
+        tgt = local_points(scene, centre, 2 * tensor.radius, local_cap, seed + k)
+        test_bs = _bisector(qp, tgt, centre, tensor.radius, seed)
+        ex_bs = ref_bs @ pose[:3, :3].T + pose[:3, 3]
+        _, score[k], _ = icp(ex_bs, test_bs, np.eye(4), md, iterations, backend)
     return BaselineResult(point, orient, score, score >= thr - 1e-12, poses, thr,
                           time.perf_counter() - t0)

@@ -46,3 +46,16 @@ def local_points(scene, centre, radius: float, cap: int, seed: int = 0) -> np.nd
     if len(idx) > cap:
         idx = np.random.default_rng(seed).choice(idx, cap, replace=False)
     return scene.points[idx]
+
+
+def candidate_poses(scene, tensor, candidates: np.ndarray, n_orientations: int):
+    """Every (candidate, orientation) pair with the pose iT would propose there.
+
+    Returns pair_point (P,), pair_orientation (P,) and poses (P, 4, 4), candidate-major:
+    pair ``c * n_orientations + o`` is candidate ``c`` turned by ``o * 2 pi / n``.
+    """
+    point = np.repeat(np.asarray(candidates, np.int64), n_orientations)
+    orient = np.tile(np.arange(n_orientations), len(candidates))
+    poses = np.array([tensor.pose(scene.points[p], 2 * np.pi * o / n_orientations)
+                      for p, o in zip(point, orient)]).reshape(-1, 4, 4)
+    return point, orient, poses

@@ -17,7 +17,7 @@ import time
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .common import BaselineResult, local_points
+from .common import BaselineResult, candidate_poses, local_points
 from .icp import icp
 
 
@@ -53,18 +53,12 @@ def naive(scene, tensor, candidates: np.ndarray, n_orientations: int = 8,
     md = max_distance or scene.spacing
     src = query_samples(tensor, seed=seed)
     thr = example_fitness(tensor, src, md, backend)
-    n = len(candidates) * n_orientations
-    point = np.repeat(np.asarray(candidates, np.int64), n_orientations)
-    orient = np.tile(np.arange(n_orientations), len(candidates))
-    score = np.zeros(n)
-    poses = np.zeros((n, 4, 4))
+    point, orient, poses = candidate_poses(scene, tensor, candidates, n_orientations)
+    score = np.zeros(len(point))
     for c, ci in enumerate(candidates):
-        pos = scene.points[ci]
-        tgt = local_points(scene, pos, tensor.radius, local_cap, seed + c)
+        tgt = local_points(scene, scene.points[ci], tensor.radius, local_cap, seed + c)
         tree = cKDTree(tgt) if len(tgt) else None
-        for o in range(n_orientations):
-            k = c * n_orientations + o
-            init = tensor.pose(pos, 2 * np.pi * o / n_orientations)
-            poses[k], score[k], _ = icp(src, tgt, init, md, iterations, backend, tree)
+        for k in range(c * n_orientations, (c + 1) * n_orientations):
+            poses[k], score[k], _ = icp(src, tgt, poses[k], md, iterations, backend, tree)
     return BaselineResult(point, orient, score, score >= thr - 1e-12, poses, thr,
                           time.perf_counter() - t0)
