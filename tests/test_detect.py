@@ -153,3 +153,26 @@ def test_detect_many_equals_one_at_a_time(corner_tensor):
         np.testing.assert_array_equal(one.pairs.accepted, res.pairs.accepted)
         np.testing.assert_array_equal(one.pairs.score, res.pairs.score)
         assert [p.point_index for p in one.predictions] == [p.point_index for p in res.predictions]
+
+
+def test_adaptive_keypoint_order_changes_only_the_work(corner_tensor):
+    scene_geometry, _ = moved_corner_scene(0.4, np.array([0.1, -0.2, 0.0]))
+    scene = it.prepare_scene(scene_geometry, 0.01, seed=6)
+    runs = {}
+    for backend in ("numba", "numpy"):
+        for order in ("weight", "adaptive"):
+            runs[backend, order] = it.detect(scene, corner_tensor, it.DetectSettings(
+                sample_fraction=0.2, keypoint_order=order, backend=backend, pilot_pairs=64))
+    ref = runs["numpy", "weight"]
+    assert 0 < ref.pairs.accepted.sum() < len(ref.pairs.accepted)
+    for r in runs.values():
+        np.testing.assert_array_equal(r.pairs.accepted, ref.pairs.accepted)
+        acc = ref.pairs.accepted
+        np.testing.assert_allclose(r.pairs.score[acc], ref.pairs.score[acc], atol=1e-9)
+        assert [p.point_index for p in r.predictions] == [p.point_index for p in ref.predictions]
+    # the keypoints that fail most often come first: rejections need fewer comparisons
+    rej = ~ref.pairs.accepted
+    for backend in ("numba", "numpy"):
+        w, a = runs[backend, "weight"].pairs, runs[backend, "adaptive"].pairs
+        assert a.decided_at[rej].mean() < w.decided_at[rej].mean()
+    assert runs["numba", "adaptive"].stats["keypoint_order"] == "adaptive"

@@ -6,8 +6,26 @@ import numpy as np
 from numba import njit, prange
 
 
+@njit(cache=True, inline="always")
+def _gap(f, c, d):
+    """Distance, in cells, from coordinate ``f`` (cell units, in cell ``c``) to cell c + d."""
+    if d > 0:
+        return d - (f - c)
+    if d < 0:
+        return (f - c) - d - 1.0
+    return 0.0
+
+
 @njit(cache=True, fastmath=False, inline="always")
-def nearest(qx, qy, qz, pts, starts, ox, oy, oz, cell, nx, ny, nz):
+def nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz):
+    """Index (into the sorted points) of the exact nearest point to q.
+
+    Starts from the points of the non-empty cell nearest to q's cell (``seed``, a distance
+    transform of the occupancy), so that far queries begin with a close bound; then visits
+    shells of cells around q's cell, skipping every cell (and every row and slab of cells)
+    whose box is farther from q than the best point so far, and stops when no unvisited
+    shell can hold a closer point.
+    """
     fx = (qx - ox) / cell
     fy = (qy - oy) / cell
     fz = (qz - oz) / cell
@@ -22,6 +40,18 @@ def nearest(qx, qy, qz, pts, starts, ox, oy, oz, cell, nx, ny, nz):
         m = 0.0
     best = np.inf
     besti = -1
+    c2 = cell * cell
+    if out == 0:
+        sc = seed[(ci * ny + cj) * nz + ck]
+        for p in range(starts[sc], starts[sc + 1]):
+            dx = pts[p, 0] - qx
+            dy = pts[p, 1] - qy
+            dz = pts[p, 2] - qz
+            d2 = dx * dx + dy * dy + dz * dz
+            if d2 < best:
+                best = d2
+                besti = p
+    bc = best / c2                  # best squared distance in cell units
     smax = max(nx, ny, nz) + out + 1
     for s in range(smax + 1):
         if besti >= 0:
@@ -34,35 +64,48 @@ def nearest(qx, qy, qz, pts, starts, ox, oy, oz, cell, nx, ny, nz):
             i = ci + di
             if i < 0 or i >= nx:
                 continue
+            gx = _gap(fx, ci, di)
+            gx2 = gx * gx
+            if gx2 >= bc:
+                continue
             edge_i = di == -s or di == s
             for dj in range(-s, s + 1):
                 j = cj + dj
                 if j < 0 or j >= ny:
                     continue
+                gy = _gap(fy, cj, dj)
+                gxy = gx2 + gy * gy
+                if gxy >= bc:
+                    continue
                 if edge_i or dj == -s or dj == s:
                     step = 1
                 else:
                     step = 2 * s if s > 0 else 1
+                base = (i * ny + j) * nz
                 dk = -s
                 while dk <= s:
                     k = ck + dk
                     if 0 <= k < nz:
-                        c = (i * ny + j) * nz + k
-                        for p in range(starts[c], starts[c + 1]):
-                            dx = pts[p, 0] - qx
-                            dy = pts[p, 1] - qy
-                            dz = pts[p, 2] - qz
-                            d2 = dx * dx + dy * dy + dz * dz
-                            if d2 < best:
-                                best = d2
-                                besti = p
+                        gz = _gap(fz, ck, dk)
+                        if gxy + gz * gz < bc:
+                            c = base + k
+                            for p in range(starts[c], starts[c + 1]):
+                                dx = pts[p, 0] - qx
+                                dy = pts[p, 1] - qy
+                                dz = pts[p, 2] - qz
+                                d2 = dx * dx + dy * dy + dz * dz
+                                if d2 < best:
+                                    best = d2
+                                    besti = p
+                                    bc = best / c2
                     dk += step
     return besti
 
+
 @njit(cache=True, parallel=True, fastmath=False)
-def score(tp, orient, offsets, prov, pnorm, weights, ang_lim, big_w, max_terms, rest,
+def score(tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, max_terms, rest,
           criterion, c, a, wsum, threshold, early_exit, surface, rho,
-          pts, nrm, starts, origin, cell, dims, out_score, out_acc, out_at, out_cmp):
+          pts, nrm, starts, seed, origin, cell, dims, out_score, out_acc, out_at, out_cmp):
     n_pairs = tp.shape[0]
     nk = offsets.shape[1]
     ox, oy, oz = origin[0], origin[1], origin[2]
@@ -79,7 +122,7 @@ def score(tp, orient, offsets, prov, pnorm, weights, ang_lim, big_w, max_terms, 
             qx = tp[i, 0] + offsets[o, k, 0]
             qy = tp[i, 1] + offsets[o, k, 1]
             qz = tp[i, 2] + offsets[o, k, 2]
-            p = nearest(qx, qy, qz, pts, starts, ox, oy, oz, cell, nx, ny, nz)
+            p = nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz)
             vx = pts[p, 0] - qx
             vy = pts[p, 1] - qy
             vz = pts[p, 2] - qz
@@ -103,12 +146,8 @@ def score(tp, orient, offsets, prov, pnorm, weights, ang_lim, big_w, max_terms, 
             if criterion == 0:
                 den = pnorm[k] * vn
                 cosang = (px * vx + py * vy + pz * vz) / den if den > 0 else 0.0
-                if cosang > 1.0:
-                    cosang = 1.0
-                elif cosang < -1.0:
-                    cosang = -1.0
                 term = 0.0
-                if math.acos(cosang) <= ang_lim[k]:
+                if cosang >= cos_lim[k]:       # angle <= limit, without acos
                     term = 1.0
                     if abs(pnorm[k] - vn) <= big_w[k] * pnorm[k] / c:
                         term = 2.0
@@ -139,8 +178,8 @@ def score(tp, orient, offsets, prov, pnorm, weights, ang_lim, big_w, max_terms, 
         out_cmp[i] = done
 
 @njit(cache=True, parallel=True)
-def nearest_many(q, pts, starts, origin, cell, dims, out):
+def nearest_many(q, pts, starts, seed, origin, cell, dims, out):
     for i in prange(q.shape[0]):
-        out[i] = nearest(q[i, 0], q[i, 1], q[i, 2], pts, starts, origin[0], origin[1],
+        out[i] = nearest(q[i, 0], q[i, 1], q[i, 2], pts, starts, seed, origin[0], origin[1],
                          origin[2], cell, dims[0], dims[1], dims[2])
 

@@ -16,7 +16,8 @@ from .descriptor import InteractionTensor
 from .predictions import Prediction, heat_map, top_k
 from .scene import Scene
 from .kernels import ScoreJob, score_jobs
-from .scoring import PairScores, make_table, score_pairs
+from .scoring import (PairScores, keypoint_terms, make_table, permuted, score_pairs,
+                      surface_vectors)
 from .settings import DetectSettings
 
 
@@ -136,6 +137,36 @@ def _prepare_index(scene: Scene, settings: DetectSettings):
     return backend, None
 
 
+def pilot_order(table, scene: Scene, pair_point: np.ndarray, orient: np.ndarray, grid,
+                vectors: str, n_pairs: int, seed: int) -> np.ndarray:
+    """Keypoint order for :attr:`DetectSettings.keypoint_order` ``adaptive``.
+
+    Scores ``n_pairs`` seeded random (test point, orientation) pairs on every keypoint and
+    orders keypoints by their mean shortfall (largest possible term minus the term reached),
+    largest first: the keypoints that fail most often in this scene are compared first.
+
+    Parameters
+    ----------
+    pair_point : (P,) scene index of each pair's test point; orient : (P,) orientation index
+    grid : the Numba grid, or None to use the scene's cKDTree
+    """
+    if len(pair_point) == 0:
+        return np.arange(table.n)
+    rng = np.random.default_rng((seed, 0x1D0))
+    pick = np.sort(rng.choice(len(pair_point), size=min(n_pairs, len(pair_point)), replace=False))
+    queries = scene.points[pair_point[pick], None, :] + table.offsets[orient[pick]]
+    flat = queries.reshape(-1, 3)
+    if grid is not None:
+        from .kernels import nearest_indices
+        nn = nearest_indices(grid, flat)
+    else:
+        nn = scene.tree.query(flat, workers=-1)[1]
+    tv = surface_vectors(queries, scene.points, scene.normals, nn.reshape(queries.shape[:2]),
+                         scene.spacing, vectors)
+    shortfall = (table.max_terms - keypoint_terms(table, slice(0, table.n), orient[pick], tv)).mean(0)
+    return np.argsort(-shortfall, kind="stable")
+
+
 def _score_all(scene, jobs, backend, grid, settings, progress, label):
     """Score every job's pairs in candidate batches; returns per job PairScores.
 
@@ -210,6 +241,7 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
                                        if (~pairs.accepted).any() else None),
         "threshold": threshold,
         "backend": backend,
+        "keypoint_order": settings.keypoint_order,
         "seconds": {k: round(v, 4) for k, v in timings.items()},
         "test_points_per_second": (float(len(test_idx) / timings["scoring"])
                                    if timings.get("scoring", 0) > 0 else None),
@@ -247,6 +279,13 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     t1 = time.perf_counter()
     backend, grid = _prepare_index(scene, settings)
     timings["index"] = time.perf_counter() - t1
+    if settings.keypoint_order == "adaptive":
+        t1 = time.perf_counter()
+        for job in jobs:
+            order = pilot_order(job.table, scene, job.points, job.orient, grid,
+                                job.vectors, settings.pilot_pairs, settings.seed)
+            job.table = permuted(job.table, order)
+        timings["keypoint_order"] = time.perf_counter() - t1
     t2 = time.perf_counter()
     label = tensors[0].affordance if len(tensors) == 1 else f"{len(tensors)} affordances"
     scores = _score_all(scene, jobs, backend, grid, settings, progress, label)

@@ -14,9 +14,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .scoring import paper_limits
+
 _KERNELS = None
 #: Largest number of grid cells (dense start table, 8 bytes each).
 MAX_CELLS = 20_000_000
+#: Pairs per work unit handed to a thread by the scoring kernel.
+PARALLEL_CHUNK = 64
 
 
 def available() -> bool:
@@ -37,6 +41,7 @@ class Grid:
     points, normals : (N, 3) float64 sorted by cell
     order : (N,) int64, original index of each sorted point
     starts : (C + 1,) int64, points of cell c are ``starts[c]:starts[c + 1]``
+    seed : (C,) int32, the non-empty cell whose centre is nearest to each cell's centre
     origin : (3,) float64, corner of cell (0, 0, 0)
     cell : float, cell edge (m)
     dims : (3,) int64 cells per axis
@@ -46,6 +51,7 @@ class Grid:
     normals: np.ndarray
     order: np.ndarray
     starts: np.ndarray
+    seed: np.ndarray
     origin: np.ndarray
     cell: float
     dims: np.ndarray
@@ -64,7 +70,21 @@ def build_grid(points: np.ndarray, normals: np.ndarray, cell: float) -> Grid:
     starts = np.zeros(len(counts) + 1, np.int64)
     np.cumsum(counts, out=starts[1:])
     return Grid(np.ascontiguousarray(points[order]), np.ascontiguousarray(normals[order]),
-                order, starts, lo, cell, dims)
+                order, starts, _nearest_occupied(counts, dims), lo, cell, dims)
+
+
+def _nearest_occupied(counts: np.ndarray, dims: np.ndarray) -> np.ndarray:
+    """(C,) int32 linear index of the non-empty cell nearest to each cell (exact Euclidean
+    distance transform of the occupancy, SciPy)."""
+    from scipy.ndimage import distance_transform_edt
+
+    empty = (counts == 0).reshape(tuple(dims))
+    if not empty.any():
+        return np.arange(len(counts), dtype=np.int32)
+    ind = distance_transform_edt(empty, return_distances=False, return_indices=True)
+    ind = ind.astype(np.int32, copy=False)
+    lin = (ind[0] * int(dims[1]) + ind[1]) * int(dims[2]) + ind[2]
+    return np.ascontiguousarray(lin.ravel(), dtype=np.int32)
 
 
 def _compile():
@@ -86,7 +106,7 @@ def nearest_indices(grid: Grid, queries: np.ndarray) -> np.ndarray:
     k = _compile()
     out = np.empty(len(queries), np.int64)
     k["nearest_many"](np.ascontiguousarray(queries, dtype=np.float64), grid.points,
-                      grid.starts, grid.origin, grid.cell, grid.dims, out)
+                      grid.starts, grid.seed, grid.origin, grid.cell, grid.dims, out)
     return grid.order[out]
 
 
@@ -106,16 +126,13 @@ class ScoreJob:
 def _job_args(job: ScoreJob, grid: Grid) -> tuple:
     t = job.table
     pnorm = np.ascontiguousarray(np.linalg.norm(t.provenance[0], axis=1))
-    wmax = t.weights.max()
-    with np.errstate(divide="ignore"):
-        big_w = np.where(t.weights > 0, wmax / np.where(t.weights > 0, t.weights, 1), np.inf)
-    angle_lim = np.minimum(big_w * t.theta_max, np.pi)   # angle limit per keypoint
+    big_w, cos_lim = paper_limits(t)
     rest = np.r_[np.cumsum(t.max_terms[::-1])[::-1], 0.0]
     return (np.ascontiguousarray(t.offsets), np.ascontiguousarray(t.provenance), pnorm,
-            np.ascontiguousarray(t.weights), angle_lim, big_w, t.max_terms, rest,
+            np.ascontiguousarray(t.weights), cos_lim, big_w, t.max_terms, rest,
             0 if t.criterion == "paper" else 1, t.c, t.a, float(t.weights.sum()),
             float(job.threshold), bool(job.early_exit), job.vectors == "surface",
-            float(job.rho), grid.points, grid.normals, grid.starts, grid.origin, grid.cell,
+            float(job.rho), grid.points, grid.normals, grid.starts, grid.seed, grid.origin, grid.cell,
             grid.dims)
 
 
@@ -132,8 +149,17 @@ def score_jobs(jobs: list, grid: Grid) -> list:
         p = len(job.points)
         out = (np.zeros(p), np.zeros(p, np.bool_), np.zeros(p, np.int64), np.zeros(p, np.int64))
         if p:
-            k["score"](np.ascontiguousarray(job.points, dtype=np.float64),
-                       np.ascontiguousarray(job.orient, np.int64), *_job_args(job, grid), *out)
+            import numba
+
+            # pairs differ a lot in cost (an accepted pair compares every keypoint): hand
+            # them to the threads in small chunks rather than one static half each
+            previous = numba.set_parallel_chunksize(PARALLEL_CHUNK)
+            try:
+                k["score"](np.ascontiguousarray(job.points, dtype=np.float64),
+                           np.ascontiguousarray(job.orient, np.int64), *_job_args(job, grid),
+                           *out)
+            finally:
+                numba.set_parallel_chunksize(previous)
         outs.append(out)
     return outs
 

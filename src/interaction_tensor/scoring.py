@@ -22,7 +22,7 @@ early exit in :func:`score_pairs` decides exactly as the full sum would.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -83,6 +83,31 @@ def make_table(keypoints_rel, provenance, weights, n_orientations: int, criterio
     return KeypointTable(offsets, prov, w, max_terms, criterion, theta_max, c, a)
 
 
+def paper_limits(table: KeypointTable) -> tuple[np.ndarray, np.ndarray]:
+    """Per keypoint, W = w_max / w_i and the cosine of the angle limit min(W theta_max, pi).
+
+    Comparing cosines (angle <= limit  <=>  cos(angle) >= cos(limit)) avoids an arccos per
+    comparison; a limit of pi accepts every angle (cosine limit -inf).
+    """
+    w = table.weights
+    with np.errstate(divide="ignore"):
+        big_w = np.where(w > 0, w.max() / np.where(w > 0, w, 1), np.inf)
+    limit = big_w * table.theta_max
+    cos_lim = np.where(limit >= np.pi, -np.inf, np.cos(np.minimum(limit, np.pi)))
+    return big_w, cos_lim
+
+
+def permuted(table: KeypointTable, order: np.ndarray) -> KeypointTable:
+    """The same keypoints compared in ``order`` (a permutation of 0..N-1).
+
+    Scores are sums over keypoints, so the order changes only how soon the early exit
+    decides, never the decision or an accepted pair's score.
+    """
+    order = np.asarray(order, dtype=np.int64)
+    return replace(table, offsets=table.offsets[:, order], provenance=table.provenance[:, order],
+                   weights=table.weights[order], max_terms=table.max_terms[order])
+
+
 def keypoint_terms(table: KeypointTable, k: slice, orient: np.ndarray,
                    test_vectors: np.ndarray) -> np.ndarray:
     """Normalised contributions of keypoints ``k`` for pairs in orientations ``orient``.
@@ -100,14 +125,12 @@ def keypoint_terms(table: KeypointTable, k: slice, orient: np.ndarray,
     pn = np.linalg.norm(p, axis=-1)
     vn = np.linalg.norm(test_vectors, axis=-1)
     if table.criterion == "paper":
-        wmax = table.weights.max()
-        with np.errstate(divide="ignore"):
-            big_w = np.where(w > 0, wmax / np.where(w > 0, w, 1), np.inf)   # W = w_max / w_i
+        big_w, cos_lim = paper_limits(table)
+        big_w, cos_lim = big_w[k], cos_lim[k]
         denom = pn * vn
         cosang = np.divide(np.einsum("pki,pki->pk", p, test_vectors), denom,
                            out=np.zeros_like(denom), where=denom > 0)
-        angle = np.arccos(np.clip(cosang, -1.0, 1.0))
-        theta_ok = angle <= np.minimum(big_w * table.theta_max, np.pi)
+        theta_ok = cosang >= cos_lim                  # angle <= W theta_max
         delta_ok = theta_ok & (np.abs(pn - vn) <= big_w * pn / table.c)
         return (theta_ok.astype(np.float64) + delta_ok) / (2 * table.n)
     d = np.linalg.norm(test_vectors - p, axis=-1) / np.maximum(pn, 1e-12)
