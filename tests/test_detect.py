@@ -176,3 +176,52 @@ def test_adaptive_keypoint_order_changes_only_the_work(corner_tensor):
         w, a = runs[backend, "weight"].pairs, runs[backend, "adaptive"].pairs
         assert a.decided_at[rej].mean() < w.decided_at[rej].mean()
     assert runs["numba", "adaptive"].stats["keypoint_order"] == "adaptive"
+
+
+@pytest.mark.parametrize("criterion", ["paper", "gaussian"])
+def test_torch_backend_decides_like_the_cpu_paths(corner_tensor, scored_setup, criterion):
+    torch = pytest.importorskip("torch")
+    from interaction_tensor.torch_backend import TorchIndex, score_pairs_torch
+    scene, pp, po = scored_setup
+    pp, po = pp[::3], po[::3]
+    settings = it.DetectSettings(criterion=criterion)
+    table = keypoint_table(corner_tensor, settings)
+    thr = corner_tensor.threshold(criterion, "weighted")
+    ref = score_pairs(scene.points[pp], po, table, scene, thr)
+    assert 0 < ref.accepted.sum() < len(pp)
+    # small tiles so that many queries fall back to the tree and tiles border each other
+    index = TorchIndex(scene, "cpu", tile=0.15, margin=0.03)
+    got = score_pairs_torch(scene.points[pp], po, table, index, thr, pairs_per_block=500)
+    np.testing.assert_array_equal(got.accepted, ref.accepted)
+    np.testing.assert_array_equal(got.decided_at, ref.decided_at)
+    np.testing.assert_allclose(got.score, ref.score, atol=1e-9)
+    # the tiled nearest neighbour is exact, inside and outside the scene's box
+    rng = np.random.default_rng(3)
+    lo, hi = scene.points.min(0) - 0.2, scene.points.max(0) + 0.2
+    q = rng.uniform(lo, hi, (4000, 3))
+    nn = index.nearest(torch.as_tensor(q)).numpy()
+    d_ref = scene.tree.query(q)[0]
+    np.testing.assert_allclose(np.linalg.norm(scene.points[nn] - q, axis=1), d_ref, atol=1e-12)
+
+
+def test_torch_backend_detection_matches_numba(corner_tensor):
+    pytest.importorskip("torch")
+    scene_geometry, _ = moved_corner_scene(1.0, np.array([0.2, 0.1, 0.0]))
+    scene = it.prepare_scene(scene_geometry, 0.01, seed=1)
+    a = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.015, backend="torch",
+                                                          device="cpu"))
+    b = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.015, backend="numba"))
+    assert a.pairs.accepted.any()
+    np.testing.assert_array_equal(a.pairs.accepted, b.pairs.accepted)
+    np.testing.assert_array_equal(a.pairs.decided_at, b.pairs.decided_at)
+    assert [p.point_index for p in a.predictions] == [p.point_index for p in b.predictions]
+    assert a.stats["backend"] == "torch" and a.stats["device"] == "cpu"
+
+
+def test_torch_backend_asks_for_a_cuda_device_it_does_not_have(corner_tensor):
+    torch = pytest.importorskip("torch")
+    if torch.cuda.is_available():
+        pytest.skip("a CUDA device is present")
+    scene = it.prepare_scene(moved_corner_scene(0.0, np.zeros(3))[0], 0.02, seed=1)
+    with pytest.raises(it.SettingsError, match="no CUDA device"):
+        it.detect(scene, corner_tensor, it.DetectSettings(backend="torch", device="cuda"))

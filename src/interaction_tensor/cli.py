@@ -91,7 +91,8 @@ def _detect_settings(args):
         criterion=args.criterion, keypoints=args.keypoints, threshold=args.threshold,
         scene_spacing=args.spacing, early_exit=not args.no_early_exit,
         normal_tolerance_deg=args.normal_tolerance, oriented_normals=args.oriented_normals,
-        nms_radius=args.nms_radius, backend=args.backend)
+        nms_radius=args.nms_radius, backend=args.backend, device=args.device,
+        keypoint_order=args.keypoint_order)
 
 
 def run_detection(scene_geometry, tensor, settings, outdir, progress, scene_name,
@@ -290,7 +291,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="suppression radius in metres (default: the query object's width)")
     p.add_argument("--no-early-exit", action="store_true",
                    help="compare every keypoint of every candidate")
-    p.add_argument("--backend", choices=("auto", "numba", "numpy"), default="auto")
+    p.add_argument("--backend", choices=("auto", "numba", "numpy", "torch"), default="auto",
+                   help="scoring backend; torch runs on a CUDA device when present "
+                        "(pip install 'interaction-tensor[torch]')")
+    p.add_argument("--device", default=None,
+                   help="torch device for --backend torch (default: cuda if present, else cpu)")
+    p.add_argument("--keypoint-order", choices=("adaptive", "weight"), default="adaptive",
+                   help="compare the keypoints that fail most often first (adaptive, same "
+                        "decisions, less work) or in weight order (paper)")
     p.add_argument("--render", action="store_true",
                    help="also write render.png: the heat map and the top predictions")
     p.add_argument("-q", "--quiet", action="store_true")

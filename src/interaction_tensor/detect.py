@@ -31,6 +31,10 @@ def resolve_backend(name: str) -> str:
         from .errors import SettingsError
 
         raise SettingsError("backend 'numba' needs Numba: pip install numba")
+    if name == "torch":
+        from .torch_backend import import_torch
+
+        import_torch()
     return name
 
 
@@ -134,6 +138,10 @@ def _prepare_index(scene: Scene, settings: DetectSettings):
     if backend == "numba":
         return backend, scene.grid()
     _ = scene.tree
+    if backend == "torch":
+        from .torch_backend import TorchIndex, resolve_device
+
+        return backend, TorchIndex(scene, resolve_device(settings.device))
     return backend, None
 
 
@@ -195,8 +203,14 @@ def _score_all(scene, jobs, backend, grid, settings, progress, label):
             for i, j in enumerate(jobs):
                 if start >= len(j.points):
                     continue
-                res = score_pairs(scene.points[j.points[sl]], j.orient[sl], j.table, scene, j.threshold,
-                                  vectors=j.vectors, early_exit=j.early_exit)
+                if backend == "torch":
+                    from .torch_backend import score_pairs_torch
+
+                    res = score_pairs_torch(scene.points[j.points[sl]], j.orient[sl], j.table,
+                                            grid, j.threshold, j.vectors, j.early_exit)
+                else:
+                    res = score_pairs(scene.points[j.points[sl]], j.orient[sl], j.table, scene,
+                                      j.threshold, vectors=j.vectors, early_exit=j.early_exit)
                 totals[i][sl], acc[i][sl], at[i][sl] = res.score, res.accepted, res.decided_at
                 cmp_[i] += res.comparisons
         if bar is not None:
@@ -207,7 +221,7 @@ def _score_all(scene, jobs, backend, grid, settings, progress, label):
 
 
 def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair_orient,
-            pairs, timings, backend, t0) -> Detection:
+            pairs, timings, backend, t0, device="cpu") -> Detection:
     """Heat map, top-k with suppression, statistics."""
     n_o = settings.n_orientations
     t3 = time.perf_counter()
@@ -241,6 +255,7 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
                                        if (~pairs.accepted).any() else None),
         "threshold": threshold,
         "backend": backend,
+        "device": device,
         "keypoint_order": settings.keypoint_order,
         "seconds": {k: round(v, 4) for k, v in timings.items()},
         "test_points_per_second": (float(len(test_idx) / timings["scoring"])
@@ -282,7 +297,8 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     if settings.keypoint_order == "adaptive":
         t1 = time.perf_counter()
         for job in jobs:
-            order = pilot_order(job.table, scene, job.points, job.orient, grid,
+            order = pilot_order(job.table, scene, job.points, job.orient,
+                                grid if backend == "numba" else None,
                                 job.vectors, settings.pilot_pairs, settings.seed)
             job.table = permuted(job.table, order)
         timings["keypoint_order"] = time.perf_counter() - t1
@@ -290,8 +306,9 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     label = tensors[0].affordance if len(tensors) == 1 else f"{len(tensors)} affordances"
     scores = _score_all(scene, jobs, backend, grid, settings, progress, label)
     timings["scoring"] = time.perf_counter() - t2
+    device = str(grid.device) if backend == "torch" else "cpu"
     return [_finish(scene, tensor, settings, job.threshold, test_idx, cand, pp, po, pairs,
-                    dict(timings), backend, t0)
+                    dict(timings), backend, t0, device)
             for tensor, job, cand, pp, po, pairs in zip(tensors, jobs, cands, pp_list,
                                                         po_list, scores)]
 

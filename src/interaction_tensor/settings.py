@@ -125,6 +125,8 @@ class DetectSettings:
     #: vectorised path over SciPy's cKDTree; ``torch``: PyTorch, on a CUDA device when one is
     #: present (see ``device``), same decisions as the CPU paths.
     backend: str = "auto"
+    #: Torch device of the ``torch`` backend; None: ``cuda`` when present, else ``cpu``.
+    device: str | None = None
     #: Seed of the test-point draw and of scene sampling.
     seed: int = 0
 

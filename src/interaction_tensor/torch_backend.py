@@ -1,0 +1,215 @@
+"""PyTorch backend: the same decisions as the Numba and NumPy paths, on a CUDA device.
+
+A GPU wants uniform work, so this path compares every keypoint of every pair (no early
+exit) and then reads the decision off the running sum exactly as the early exit would have
+made it: the accept/reject flags, the accepted scores and ``decided_at`` are those of
+:func:`interaction_tensor.scoring.score_pairs` with the same keypoint order.
+
+Nearest neighbours are exact. The scene's bounding box is cut into cubic tiles; each tile
+keeps the scene points of the tile grown by a margin. A query's nearest point among its
+tile's points is the true nearest point whenever it is closer than the query's distance to
+the outside of the grown tile; the few queries where that fails (far from every surface of
+the tile) are answered by SciPy's cKDTree. Distances are float64 throughout.
+
+PyTorch is imported lazily; ``pip install "interaction-tensor[torch]"``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .errors import SettingsError
+from .scoring import PairScores, paper_limits
+
+#: Largest candidate-distance matrix computed at once (entries), to bound device memory.
+MAX_BLOCK = 1 << 25
+
+
+def import_torch():
+    """The ``torch`` module, or a SettingsError saying how to install it."""
+    try:
+        import torch
+    except ImportError:
+        raise SettingsError("backend 'torch' needs PyTorch: pip install "
+                            "'interaction-tensor[torch]' (or pip install torch)") from None
+    return torch
+
+
+def available() -> bool:
+    """True when PyTorch imports."""
+    try:
+        import_torch()
+    except SettingsError:
+        return False
+    return True
+
+
+def resolve_device(name: str | None) -> str:
+    """``None``/``auto``: ``cuda`` when a CUDA device is present, else ``cpu``."""
+    torch = import_torch()
+    if name in (None, "auto"):
+        return "cuda" if torch.cuda.is_available() else "cpu"
+    if name.startswith("cuda") and not torch.cuda.is_available():
+        raise SettingsError(f"device {name!r} asked for, but PyTorch sees no CUDA device")
+    return name
+
+
+class TorchIndex:
+    """Scene points, normals and the tiles on one torch device.
+
+    Parameters
+    ----------
+    scene : a :class:`~interaction_tensor.scene.Scene`
+    device : torch device name (``cuda``, ``cuda:1``, ``cpu``)
+    tile : tile edge (m); None: 16 scene spacings, at least 0.1 m (a few thousand points
+        per grown tile on a surface scene)
+    margin : how far (m) each tile reaches out for points; None: a quarter of the tile
+    """
+
+    def __init__(self, scene, device: str = "cuda", tile: float | None = None,
+                 margin: float | None = None):
+        torch = import_torch()
+        self.torch = torch
+        self.scene = scene
+        self.device = torch.device(device)
+        pts = scene.points
+        self.tile = float(tile if tile is not None else max(16 * scene.spacing, 0.1))
+        self.margin = float(margin if margin is not None else self.tile / 4)
+        self.lo = pts.min(axis=0)
+        self.dims = np.maximum(np.ceil((np.ptp(pts, axis=0) + 1e-9) / self.tile), 1).astype(np.int64)
+        # every tile whose grown box holds a point: at most 2 tiles per axis when margin < tile/2
+        first = np.floor((pts - self.margin - self.lo) / self.tile).astype(np.int64)
+        last = np.floor((pts + self.margin - self.lo) / self.tile).astype(np.int64)
+        first = np.clip(first, 0, self.dims - 1)
+        last = np.clip(last, 0, self.dims - 1)
+        members, tiles = [], []
+        span = int(np.ceil(2 * self.margin / self.tile)) + 1
+        for dx in range(span):
+            for dy in range(span):
+                for dz in range(span):
+                    t = first + (dx, dy, dz)
+                    ok = np.all(t <= last, axis=1)
+                    members.append(np.flatnonzero(ok))
+                    tiles.append(self._linear(t[ok]))
+        members = np.concatenate(members)
+        tiles = np.concatenate(tiles)
+        order = np.argsort(tiles, kind="stable")
+        self.members = members[order]
+        counts = np.bincount(tiles, minlength=int(np.prod(self.dims)))
+        self.starts = np.r_[0, np.cumsum(counts)]
+        f64 = torch.float64
+        self.points = torch.as_tensor(pts, dtype=f64, device=self.device)
+        self.normals = torch.as_tensor(scene.normals, dtype=f64, device=self.device)
+        self._members = torch.as_tensor(self.members, device=self.device)
+
+    def _linear(self, t: np.ndarray) -> np.ndarray:
+        return (t[:, 0] * self.dims[1] + t[:, 1]) * self.dims[2] + t[:, 2]
+
+    def nearest(self, q):
+        """Exact nearest scene point index of each query, (Q,) int64 tensor on the device."""
+        torch = self.torch
+        out = torch.full((q.shape[0],), -1, dtype=torch.int64, device=self.device)
+        lo = torch.as_tensor(self.lo, dtype=q.dtype, device=self.device)
+        dims = torch.as_tensor(self.dims, device=self.device)
+        t3 = torch.floor((q - lo) / self.tile).to(torch.int64)
+        t3 = torch.minimum(torch.clamp(t3, min=0), dims - 1)
+        lin = (t3[:, 0] * dims[1] + t3[:, 1]) * dims[2] + t3[:, 2]
+        # distance from each query to the outside of its grown tile (negative: outside it)
+        box_lo = lo + t3.to(q.dtype) * self.tile - self.margin
+        box_hi = box_lo + self.tile + 2 * self.margin
+        room = torch.minimum(q - box_lo, box_hi - q).min(dim=1).values
+        order = torch.argsort(lin, stable=True)
+        uniq, counts = torch.unique_consecutive(lin[order], return_counts=True)
+        bounds = np.r_[0, np.cumsum(counts.cpu().numpy())]
+        for u, a, b in zip(uniq.cpu().numpy(), bounds[:-1], bounds[1:]):
+            s, e = self.starts[u], self.starts[u + 1]
+            if e == s:
+                continue
+            cand = self._members[s:e]
+            centre = lo + (torch.as_tensor(np.unravel_index(u, self.dims), device=self.device)
+                           .to(q.dtype) + 0.5) * self.tile
+            p = self.points[cand] - centre
+            step = max(1, MAX_BLOCK // int(e - s))
+            for c0 in range(a, b, step):
+                idx = order[c0:min(c0 + step, b)]
+                d2 = torch.cdist(q[idx] - centre, p).square_()
+                best = d2.argmin(dim=1)
+                nn = cand[best]
+                exact = (self.points[nn] - q[idx]).square().sum(dim=1)
+                ok = exact <= room[idx].clamp(min=0).square()
+                out[idx[ok]] = nn[ok]
+        left = torch.nonzero(out < 0).flatten()
+        if len(left):                       # far from every surface of the tile: exact tree
+            _, nn = self.scene.tree.query(q[left].cpu().numpy(), workers=-1)
+            out[left] = torch.as_tensor(nn, dtype=torch.int64, device=self.device)
+        return out
+
+
+def score_pairs_torch(points: np.ndarray, orient: np.ndarray, table, index: TorchIndex,
+                      threshold: float, vectors: str = "surface", early_exit: bool = True,
+                      pairs_per_block: int = 2048) -> PairScores:
+    """Score pairs like :func:`interaction_tensor.scoring.score_pairs`, on ``index.device``.
+
+    Returns the same accepted flags, accepted scores and ``decided_at``; a rejected pair's
+    score is its partial sum at the decision when ``early_exit`` (as on the CPU), its full
+    score otherwise. ``comparisons`` counts every keypoint compared (all of them here).
+    """
+    torch = index.torch
+    dev, f64 = index.device, torch.float64
+    n = table.n
+    offsets = torch.as_tensor(table.offsets, dtype=f64, device=dev)
+    prov = torch.as_tensor(table.provenance, dtype=f64, device=dev)
+    w = torch.as_tensor(table.weights, dtype=f64, device=dev)
+    pn = torch.linalg.vector_norm(prov[0], dim=1)
+    rest = np.r_[np.cumsum(table.max_terms[::-1])[::-1], 0.0]
+    rest_next = torch.as_tensor(rest[1:], dtype=f64, device=dev)
+    big_w, cos_lim = (torch.as_tensor(a, dtype=f64, device=dev) for a in paper_limits(table))
+    eps = 1e-12
+    out_s = np.zeros(len(points))
+    out_a = np.zeros(len(points), bool)
+    out_at = np.zeros(len(points), np.int64)
+    for b0 in range(0, len(points), pairs_per_block):
+        sl = slice(b0, b0 + pairs_per_block)
+        tp = torch.as_tensor(points[sl], dtype=f64, device=dev)
+        o = torch.as_tensor(np.asarray(orient[sl], np.int64), device=dev)
+        q = tp[:, None, :] + offsets[o]                                     # (P, N, 3)
+        nn = index.nearest(q.reshape(-1, 3)).reshape(q.shape[:2])
+        v = index.points[nn] - q
+        if vectors == "surface":
+            nrm = index.normals[nn]
+            along = (v * nrm).sum(-1, keepdim=True) * nrm
+            lateral = v - along
+            lat = torch.linalg.vector_norm(lateral, dim=-1, keepdim=True)
+            shrink = torch.where(lat > index.scene.spacing,
+                                 (lat - index.scene.spacing) / torch.where(lat > 0, lat, 1.0),
+                                 torch.zeros_like(lat))
+            v = along + lateral * shrink
+        p = prov[o]
+        vn = torch.linalg.vector_norm(v, dim=-1)
+        if table.criterion == "paper":
+            den = pn * vn
+            cosang = torch.where(den > 0, (p * v).sum(-1) / torch.where(den > 0, den, 1.0),
+                                 torch.zeros_like(den))
+            theta = cosang >= cos_lim
+            delta = theta & ((pn - vn).abs() <= big_w * pn / table.c)
+            terms = (theta.to(f64) + delta.to(f64)) / (2.0 * n)
+        else:
+            d = torch.linalg.vector_norm(v - p, dim=-1) / pn.clamp(min=1e-12)
+            sigma = table.a * (1.0 + w)
+            terms = w * torch.exp(-d * d / (2.0 * sigma * sigma)) / w.sum()
+        cs = torch.cumsum(terms, dim=1)
+        reach = cs >= threshold - eps
+        lost = cs + rest_next < threshold - eps
+        never = torch.full((cs.shape[0],), n, dtype=torch.int64, device=dev)
+        first_acc = torch.where(reach.any(1), reach.to(torch.int8).argmax(1), never)
+        first_rej = torch.where(lost.any(1), lost.to(torch.int8).argmax(1), never)
+        acc = first_acc <= first_rej
+        at = torch.minimum(first_acc, first_rej)
+        score = cs[:, -1]
+        if early_exit:
+            partial = cs.gather(1, at.clamp(max=n - 1)[:, None])[:, 0]
+            score = torch.where(acc, score, partial)
+        out_s[sl] = score.cpu().numpy()
+        out_a[sl] = acc.cpu().numpy()
+        out_at[sl] = (at + 1).clamp(max=n).cpu().numpy()
+    return PairScores(out_s, out_a, out_at, len(points) * n)
