@@ -41,6 +41,7 @@ def nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz):
     best = np.inf
     besti = -1
     c2 = cell * cell
+    sc = -1
     if out == 0:
         sc = seed[(ci * ny + cj) * nz + ck]
         for p in range(starts[sc], starts[sc + 1]):
@@ -87,8 +88,8 @@ def nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz):
                     k = ck + dk
                     if 0 <= k < nz:
                         gz = _gap(fz, ck, dk)
-                        if gxy + gz * gz < bc:
-                            c = base + k
+                        c = base + k
+                        if gxy + gz * gz < bc and c != sc:      # the seed cell is done
                             for p in range(starts[c], starts[c + 1]):
                                 dx = pts[p, 0] - qx
                                 dy = pts[p, 1] - qy
