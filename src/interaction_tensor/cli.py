@@ -119,9 +119,13 @@ def _report(args, result, outdir) -> None:
     _say(args, f"scene: {st['scene_points']} points, {st['test_points_sampled']} test points, "
                f"{st['candidates_after_normal_filter']} after the normal filter")
     _say(args, f"scored {st['pairs_scored']} (point, orientation) pairs in "
-               f"{st['seconds']['scoring']:.2f} s ({st['backend']}); accepted "
+               f"{st['seconds']['scoring']:.2f} s ({st['backend']}"
+               f"{' on ' + st['device'] if st['backend'] == 'torch' else ''}); accepted "
                f"{st['pairs_accepted']}; {st['mean_comparisons_per_decision']:.0f} keypoint "
                "comparisons per decision")
+    if st["backend"] == "torch" and st["device"] == "cpu":
+        print("itensor: note: no CUDA device, so the torch backend ran on the CPU, where the "
+              "default Numba backend is much faster", file=sys.stderr)
     for rank, p in enumerate(result.predictions[:10], 1):
         x, y, z = p.position
         _say(args, f"  #{rank:<2d} score {p.score:.3f} at ({x:.3f}, {y:.3f}, {z:.3f}) m, "
