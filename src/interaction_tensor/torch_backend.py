@@ -23,6 +23,8 @@ from .scoring import PairScores, paper_limits
 
 #: Largest candidate-distance matrix computed at once (entries), to bound device memory.
 MAX_BLOCK = 1 << 25
+#: Largest number of tiles.
+MAX_TILES = 2_000_000
 
 
 def import_torch():
@@ -73,10 +75,13 @@ class TorchIndex:
         self.scene = scene
         self.device = torch.device(device)
         pts = scene.points
-        self.tile = float(tile if tile is not None else max(16 * scene.spacing, 0.1))
-        self.margin = float(margin if margin is not None else self.tile / 4)
         self.lo = pts.min(axis=0)
-        self.dims = np.maximum(np.ceil((np.ptp(pts, axis=0) + 1e-9) / self.tile), 1).astype(np.int64)
+        extent = np.ptp(pts, axis=0) + 1e-9
+        tile = float(tile if tile is not None else max(16 * scene.spacing, 0.1))
+        # a wide scene gets larger tiles rather than a huge tile table
+        self.tile = float(max(tile, (np.prod(extent + tile) / MAX_TILES) ** (1 / 3)))
+        self.margin = float(margin if margin is not None else self.tile / 4)
+        self.dims = np.maximum(np.ceil(extent / self.tile), 1).astype(np.int64)
         # every tile whose grown box holds a point: at most 2 tiles per axis when margin < tile/2
         first = np.floor((pts - self.margin - self.lo) / self.tile).astype(np.int64)
         last = np.floor((pts + self.margin - self.lo) / self.tile).astype(np.int64)
