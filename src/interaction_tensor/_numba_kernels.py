@@ -16,6 +16,20 @@ def _gap(f, c, d):
     return 0.0
 
 
+@njit(cache=True, inline="always")
+def _scan_cell(qx, qy, qz, pts, lo, hi, best, besti):
+    """Closest of points ``lo:hi`` to q if closer than ``best`` (squared): (best, besti)."""
+    for p in range(lo, hi):
+        dx = pts[p, 0] - qx
+        dy = pts[p, 1] - qy
+        dz = pts[p, 2] - qz
+        d2 = dx * dx + dy * dy + dz * dz
+        if d2 < best:
+            best = d2
+            besti = p
+    return best, besti
+
+
 @njit(cache=True, fastmath=False, inline="always")
 def nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz):
     """Index (into the sorted points) of the exact nearest point to q.
@@ -44,14 +58,7 @@ def nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz):
     sc = -1
     if out == 0:
         sc = seed[(ci * ny + cj) * nz + ck]
-        for p in range(starts[sc], starts[sc + 1]):
-            dx = pts[p, 0] - qx
-            dy = pts[p, 1] - qy
-            dz = pts[p, 2] - qz
-            d2 = dx * dx + dy * dy + dz * dz
-            if d2 < best:
-                best = d2
-                besti = p
+        best, besti = _scan_cell(qx, qy, qz, pts, starts[sc], starts[sc + 1], best, besti)
     bc = best / c2                  # best squared distance in cell units
     smax = max(nx, ny, nz) + out + 1
     for s in range(smax + 1):
@@ -90,15 +97,9 @@ def nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz):
                         gz = _gap(fz, ck, dk)
                         c = base + k
                         if gxy + gz * gz < bc and c != sc:      # the seed cell is done
-                            for p in range(starts[c], starts[c + 1]):
-                                dx = pts[p, 0] - qx
-                                dy = pts[p, 1] - qy
-                                dz = pts[p, 2] - qz
-                                d2 = dx * dx + dy * dy + dz * dz
-                                if d2 < best:
-                                    best = d2
-                                    besti = p
-                                    bc = best / c2
+                            best, besti = _scan_cell(qx, qy, qz, pts, starts[c], starts[c + 1],
+                                                     best, besti)
+                            bc = best / c2
                     dk += step
     return besti
 

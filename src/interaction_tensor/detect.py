@@ -175,10 +175,11 @@ def pilot_order(table, scene: Scene, pair_point: np.ndarray, orient: np.ndarray,
     return np.argsort(-shortfall, kind="stable")
 
 
-def _score_all(scene, jobs, backend, grid, settings, progress, label):
+def _score_all(scene, jobs, backend, index, settings, progress, label):
     """Score every job's pairs in candidate batches; returns per job PairScores.
 
-    Here a job's ``points`` are scene indices, gathered batch by batch to bound memory.
+    Here a job's ``points`` are scene indices, gathered batch by batch to bound memory;
+    ``index`` is the backend's search structure (Numba grid, TorchIndex, or None for cKDTree).
     """
     n_o = settings.n_orientations
     step = settings.batch_size * n_o
@@ -196,7 +197,7 @@ def _score_all(scene, jobs, backend, grid, settings, progress, label):
         if backend == "numba":
             batch = [ScoreJob(scene.points[j.points[sl]], j.orient[sl], j.table, j.threshold, j.vectors,
                               j.rho, j.early_exit) for j in jobs]
-            for i, (s, a, d, c) in enumerate(score_jobs(batch, grid)):
+            for i, (s, a, d, c) in enumerate(score_jobs(batch, index)):
                 totals[i][sl], acc[i][sl], at[i][sl] = s, a, d
                 cmp_[i] += int(c.sum())
         else:
@@ -207,7 +208,7 @@ def _score_all(scene, jobs, backend, grid, settings, progress, label):
                     from .torch_backend import score_pairs_torch
 
                     res = score_pairs_torch(scene.points[j.points[sl]], j.orient[sl], j.table,
-                                            grid, j.threshold, j.vectors, j.early_exit)
+                                            index, j.threshold, j.vectors, j.early_exit)
                 else:
                     res = score_pairs(scene.points[j.points[sl]], j.orient[sl], j.table, scene,
                                       j.threshold, vectors=j.vectors, early_exit=j.early_exit)
@@ -292,21 +293,21 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
                              scene.spacing, settings.early_exit))
     timings["candidates"] = time.perf_counter() - t0
     t1 = time.perf_counter()
-    backend, grid = _prepare_index(scene, settings)
+    backend, index = _prepare_index(scene, settings)
     timings["index"] = time.perf_counter() - t1
     if settings.keypoint_order == "adaptive":
         t1 = time.perf_counter()
         for job in jobs:
             order = pilot_order(job.table, scene, job.points, job.orient,
-                                grid if backend == "numba" else None,
+                                index if backend == "numba" else None,
                                 job.vectors, settings.pilot_pairs, settings.seed)
             job.table = permuted(job.table, order)
         timings["keypoint_order"] = time.perf_counter() - t1
     t2 = time.perf_counter()
     label = tensors[0].affordance if len(tensors) == 1 else f"{len(tensors)} affordances"
-    scores = _score_all(scene, jobs, backend, grid, settings, progress, label)
+    scores = _score_all(scene, jobs, backend, index, settings, progress, label)
     timings["scoring"] = time.perf_counter() - t2
-    device = str(grid.device) if backend == "torch" else "cpu"
+    device = str(index.device) if backend == "torch" else "cpu"
     return [_finish(scene, tensor, settings, job.threshold, test_idx, cand, pp, po, pairs,
                     dict(timings), backend, t0, device)
             for tensor, job, cand, pp, po, pairs in zip(tensors, jobs, cands, pp_list,

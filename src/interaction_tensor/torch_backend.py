@@ -37,15 +37,6 @@ def import_torch():
     return torch
 
 
-def available() -> bool:
-    """True when PyTorch imports."""
-    try:
-        import_torch()
-    except SettingsError:
-        return False
-    return True
-
-
 def resolve_device(name: str | None) -> str:
     """``None``/``auto``: ``cuda`` when a CUDA device is present, else ``cpu``."""
     torch = import_torch()
