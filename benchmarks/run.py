@@ -89,8 +89,9 @@ def _top5(det) -> list:
 
 
 def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
-    """Detection of the paper's bowl with the default settings (Numba, adaptive order), the
-    paper's weight order for comparison, and the exact reference on a candidate subset."""
+    """Detection of the paper's bowl with the default settings (Numba, the paper's weight
+    order), the adaptive order for comparison, and the exact reference on a candidate
+    subset."""
     import interaction_tensor as it
     from interaction_tensor.detect import keypoint_table
     from interaction_tensor.scoring import score_pairs_exact
@@ -108,7 +109,7 @@ def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
     out = {"scene": scene_name, "scene_points": len(scene), "sample_fraction": fraction,
            "prepare_s": round(prepare_s, 3), "index_s": round(index_s, 3)}
     dets = {}
-    for order in ("adaptive", "weight"):
+    for order in ("weight", "adaptive"):
         det = it.detect(scene, tensor, it.DetectSettings(sample_fraction=fraction,
                                                          keypoint_order=order))
         st = det.stats
@@ -124,7 +125,7 @@ def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
             "keypoint_evaluations_per_s": st["keypoint_comparisons"] / sc,
             "mean_comparisons_per_decision": st["mean_comparisons_per_decision"],
             "top5": _top5(det)}
-    a, w = dets["adaptive"], dets["weight"]
+    a, w = dets["weight"], dets["adaptive"]     # the default first
     out["orders_agree"] = {
         "decisions": float(np.mean(a.pairs.accepted == w.pairs.accepted)),
         "top5": _top5(a) == _top5(w)}
@@ -138,14 +139,10 @@ def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
     t0 = time.perf_counter()
     ref = score_pairs_exact(scene.points[pp], po, table, scene, a.threshold, tensor.vectors)
     ref_s = time.perf_counter() - t0
-    # the fast path on exactly the reference's pairs (adaptive order from the same pilot)
-    from interaction_tensor.detect import pilot_order
-    from interaction_tensor.scoring import permuted
+    # the fast path (default settings) on exactly the reference's pairs
     t0 = time.perf_counter()
-    order = pilot_order(table, scene, pp, po, scene.grid(), tensor.vectors,
-                        a.settings.pilot_pairs, a.settings.seed)
-    s, acc, _, _ = score_pairs_numba(scene.points[pp], po, permuted(table, order), scene.grid(),
-                                     a.threshold, tensor.vectors, scene.spacing)
+    s, acc, _, _ = score_pairs_numba(scene.points[pp], po, table, scene.grid(), a.threshold,
+                                     tensor.vectors, scene.spacing)
     fast_s = time.perf_counter() - t0
     from interaction_tensor.detect import suppression_radius
     from interaction_tensor.predictions import top_k
@@ -303,23 +300,45 @@ NOTES = """## Where the time goes, and what was tried
 - Nearly all of the scoring time is exact nearest-neighbour search: on one thread a
   kitchen5 keypoint query costs about 0.4 us on average (0.2 us within 1 cm of a surface,
   1-2.5 us for keypoints far from every surface), the rest of a comparison about 0.05 us.
-- Kept: the adaptive keypoint order (half the comparisons per decision on kitchen5, 317 ->
-  164; the far keypoints it puts first are the expensive ones, so time drops less); pruning
-  grid cells, rows and slabs by their box distance (2.7 -> 1.3 us per shuffled query); seeding
-  the search from a distance transform of the cell occupancy; comparing cosines instead of
-  angles; handing pairs to threads in chunks of 64 (accepted pairs cost 512 comparisons,
-  rejected ones ~120).
+- Kept as an option: the adaptive keypoint order (half the comparisons per decision on
+  kitchen5, 317 -> 164; the far keypoints it puts first are the expensive ones, so time
+  drops only 8 % there, and on living-room4 it rises 4 %). It was the default for a day:
+  rejected pairs' partial scores then come from another order, and the judged accuracy of
+  `itensor evaluate` (which ranks rejected pairs where few are accepted) fell from 67.4 % to
+  59.9 %, so the paper's weight order is back.
+- Kept: pruning grid cells, rows and slabs by their box distance (2.7 -> 1.3 us per shuffled
+  query); seeding the search from a distance transform of the cell occupancy; comparing
+  cosines instead of angles; handing pairs to threads in chunks of 64 (accepted pairs cost
+  512 comparisons, rejected ones ~120).
 - Tried and dropped (measured on kitchen5, this machine, 2026-11-21): finer grid cells
   (1.5 and 2 spacings: slower); a second level of 4x4x4 super-cells for far queries (no
   gain); sorting test points along a Morton curve (no change beyond noise); exact per-cell
   candidate lists (2 cm cells) built for each batch: 590k cells and 206 points per list for one
   1 % batch, 7.4 s to build against 2.3 s for the whole grid-searched run; cheap
   Delta-failure proofs from the seed cell (simulated: rejections need 108 instead of 124 exact
-  comparisons, not worth a second pass); a cost-aware order (simulated: 3 %).
+  comparisons, not worth a second pass); a cost-aware order (simulated: 3 %); grid cells of
+  4 and 5 spacings instead of 3 (10.0-12.9 s at 5 % test points for all three, run-to-run
+  noise).
+- Approximate nearest neighbours, prototyped and dropped (kitchen5, 5 % test points,
+  adaptive order, against the exact run: 11.4 s, 25,787 accepted pairs): a table over 1 cm
+  voxels holding the exact nearest sample of each voxel centre, filled on first use, answers
+  a keypoint with its voxel's sample. Once filled it scores in 1.76 s (6.5x), 4.8 s with the
+  filling, but only 96.5 % of decisions are identical (8,612 accepted pairs lost) and the
+  top 5 differ. 5 mm voxels: 99.4 %, top 5 differ, and the table is 1 GB. 1 cm voxels plus a
+  greedy walk on an 8-nearest-neighbour graph of the samples: 99.2 % (3.2 s filled), top 5
+  differ. All below the 99.5 % asked for. Why (400 accepted pairs, 1 cm voxels): 3.2 % of
+  keypoint terms change, 94 % of them lost, at keypoints 0.8-1.3 cm from a surface
+  (quartiles; the heavy contact keypoints), where the voxel's sample lies 15-21 mm from the
+  exact nearest one, on the same surface; against a 1 cm test vector that turns it by 17-53
+  degrees (quartiles). The mean accepted score drops from 0.842 to 0.815, next to the 0.807
+  threshold. Exact search for keypoints within 5 cm of the voxel's sample and the table
+  beyond: 99.86 %, top 5 differ, and only 1.5x faster once filled (the near keypoints are
+  the many). Using the table's sample only as the starting bound of the exact search stays
+  exact but saves 9 % once filled (10.4 s), less than the filling costs.
 - A decision cannot need fewer comparisons than the threshold allows: with the calibrated
   threshold (about 0.81 of the maximum here) an acceptance needs at least 413 of 512
   keypoints and a rejection at least about 50, so an exact single-descriptor detection stays
-  within a small factor of today's 164 comparisons per decision.
+  within a small factor of the adaptive order's 164 comparisons per decision.
 """
 
 
@@ -340,19 +359,20 @@ def markdown(results: dict) -> str:
                      f"{m['calibration']:.3f} | **{m['total']:.3f}** |")
     lines += ["", f"Peak memory of the training process: {results['train']['peak_rss_mb']:.0f} MB", ""]
     lines += ["## Detection (placing-bowl, paper criterion, weighted keypoints, Numba backend)", "",
-              "`adaptive` is the default keypoint order (most often failing first, measured on a "
-              "pilot); `weight` is the paper's order. Both decide exactly alike.", "",
+              "`weight` is the default keypoint order (the paper's); `adaptive` compares first the "
+              "keypoints that fail most often on a pilot. Both decide exactly alike; only the "
+              "partial scores kept by rejected pairs differ (README).", "",
               "| scene | points | fraction | order | test points | candidates | scoring s | test points/s | keypoint evals/s | comparisons/decision | peak MB |",
               "|---|---|---|---|---|---|---|---|---|---|---|"]
     for d in results["detect"]:
-        for order in ("adaptive", "weight"):
+        for order in ("weight", "adaptive"):
             o = d[order]
             lines.append(f"| {d['scene']} | {d['scene_points']} | {d['sample_fraction']} | {order} | "
                          f"{o['test_points']} | {o['candidates']} | {o['scoring_s']:.1f} | "
                          f"**{o['test_points_per_s']:.0f}** | "
                          f"{o['keypoint_evaluations_per_s'] / 1e6:.2f} M | "
                          f"{o['mean_comparisons_per_decision']:.0f} | {d['peak_rss_mb']:.0f} |")
-    lines += ["", "Adaptive against weight order: " + "; ".join(
+    lines += ["", "Weight against adaptive order: " + "; ".join(
         f"{d['scene']}: {100 * d['orders_agree']['decisions']:.2f} % identical decisions, "
         f"identical top 5: {d['orders_agree']['top5']}" for d in results["detect"]) + "."]
     lines += ["", "### Against the exact reference (same candidates, all 512 keypoints, batched cKDTree, no early exit)", "",
@@ -396,8 +416,9 @@ def markdown(results: dict) -> str:
               f"| training under 2 s median per example | slowest {worst_train:.2f} s | "
               f"{'yes' if worst_train < 2 else 'no'} |",
               f"| 20,000 test points/s per affordance on kitchen5 | "
-              f"{k5['adaptive']['test_points_per_s']:.0f} | "
-              f"{'yes' if k5['adaptive']['test_points_per_s'] >= 20000 else 'no'} |",
+              f"{k5['weight']['test_points_per_s']:.0f} (adaptive order: "
+              f"{k5['adaptive']['test_points_per_s']:.0f}) | "
+              f"{'yes' if k5['weight']['test_points_per_s'] >= 20000 else 'no'} |",
               f"| >= 99.5 % identical decisions, identical top 5 | "
               f"{100 * k5['reference']['decision_agreement']:.2f} %, top 5 {k5['reference']['top5_identical']} | "
               f"{'yes' if k5['reference']['decision_agreement'] >= 0.995 and k5['reference']['top5_identical'] else 'no'} |"]

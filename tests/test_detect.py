@@ -178,6 +178,30 @@ def test_adaptive_keypoint_order_changes_only_the_work(corner_tensor):
     assert runs["numba", "adaptive"].stats["keypoint_order"] == "adaptive"
 
 
+def test_default_detection_keeps_the_papers_partial_scores(corner_tensor):
+    """A rejected pair keeps its partial score at the rejection, which depends on the keypoint
+    order; the fallback ranking (fewer than top_k accepted) and the evaluation rely on it.
+    By default it must be the paper's: weight order, early exit (the NumPy reference)."""
+    scene_geometry, _ = moved_corner_scene(0.4, np.array([0.1, -0.2, 0.0]))
+    scene = it.prepare_scene(scene_geometry, 0.01, seed=6)
+    det = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2))
+    assert det.stats["keypoint_order"] == "weight"
+    table = keypoint_table(corner_tensor, det.settings)
+    ref = score_pairs(scene.points[det.pair_point], det.pair_orientation, table, scene,
+                      det.threshold, vectors=corner_tensor.vectors)
+    rej = ~ref.accepted
+    assert rej.sum() > 10
+    np.testing.assert_array_equal(det.pairs.accepted, ref.accepted)
+    np.testing.assert_array_equal(det.pairs.decided_at, ref.decided_at)
+    np.testing.assert_allclose(det.pairs.score, ref.score, atol=1e-9)
+    adaptive = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2,
+                                                                 keypoint_order="adaptive",
+                                                                 pilot_pairs=64))
+    # the same decisions, but the rejected pairs' partial scores are another order's
+    np.testing.assert_array_equal(adaptive.pairs.accepted, ref.accepted)
+    assert not np.allclose(adaptive.pairs.score[rej], ref.score[rej])
+
+
 @pytest.mark.parametrize("criterion", ["paper", "gaussian"])
 def test_torch_backend_decides_like_the_cpu_paths(corner_tensor, scored_setup, criterion):
     torch = pytest.importorskip("torch")

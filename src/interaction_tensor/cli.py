@@ -300,9 +300,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "(pip install 'interaction-tensor[torch]')")
     p.add_argument("--device", default=None,
                    help="torch device for --backend torch (default: cuda if present, else cpu)")
-    p.add_argument("--keypoint-order", choices=("adaptive", "weight"), default="adaptive",
-                   help="compare the keypoints that fail most often first (adaptive, same "
-                        "decisions, less work) or in weight order (paper)")
+    p.add_argument("--keypoint-order", choices=("weight", "adaptive"), default="weight",
+                   help="compare keypoints in weight order (paper) or those that fail most often "
+                        "first (adaptive: same decisions and accepted scores, fewer comparisons; "
+                        "rejected pairs keep another partial score)")
     p.add_argument("--render", action="store_true",
                    help="also write render.png: the heat map and the top predictions")
     p.add_argument("-q", "--quiet", action="store_true")
