@@ -297,9 +297,16 @@ def case_torch(scene_name: str, fraction: float) -> dict:
 
 NOTES = """## Where the time goes, and what was tried
 
-- Nearly all of the scoring time is exact nearest-neighbour search: on one thread a
-  kitchen5 keypoint query costs about 0.4 us on average (0.2 us within 1 cm of a surface,
-  1-2.5 us for keypoints far from every surface), the rest of a comparison about 0.05 us.
+- Nearly all of the scoring time is exact nearest-neighbour search. Profile of the queries a
+  kitchen5 detection makes in the paper's weight order (3,000 pairs, 961k queries, one
+  thread, 2026-11-21): 85 % lie within 2 cm of a surface and cost 310-360 ns each; 14 % at
+  2-5 cm, 660 ns; 2 % beyond 5 cm, 1.9-4.7 us; 326 ns on average. The rest of a comparison
+  costs about 0.05 us. Queries taken in grid order cost far less than scattered ones
+  (queries on samples: 62 ns in grid order against 606 ns in random order; 2 mm off the
+  samples, in grid order: 146 ns), but reordering the work for locality did not help inside
+  the scoring kernel: test points in grid order, and groups of 8 or 32 neighbouring test
+  points compared keypoint by keypoint so that consecutive queries are centimetres apart,
+  took 11.0-14.2 s against 11.6-13.2 s (5 % test points, run-to-run noise).
 - Kept as an option: the adaptive keypoint order (half the comparisons per decision on
   kitchen5, 317 -> 164; the far keypoints it puts first are the expensive ones, so time
   drops only 8 % there, and on living-room4 it rises 4 %). It was the default for a day:
