@@ -16,8 +16,7 @@ from .descriptor import InteractionTensor
 from .predictions import Prediction, heat_map, top_k
 from .scene import Scene
 from .kernels import ScoreJob, score_jobs
-from .scoring import (PairScores, keypoint_terms, make_table, permuted, score_pairs,
-                      surface_vectors)
+from .scoring import PairScores, all_terms, make_table, permuted, score_pairs
 from .settings import DetectSettings
 
 
@@ -162,16 +161,16 @@ def pilot_order(table, scene: Scene, pair_point: np.ndarray, orient: np.ndarray,
         return np.arange(table.n)
     rng = np.random.default_rng((seed, 0x1D0))
     pick = np.sort(rng.choice(len(pair_point), size=min(n_pairs, len(pair_point)), replace=False))
-    queries = scene.points[pair_point[pick], None, :] + table.offsets[orient[pick]]
-    flat = queries.reshape(-1, 3)
     if grid is not None:
         from .kernels import nearest_indices
-        nn = nearest_indices(grid, flat)
+
+        def nearest(q):
+            return nearest_indices(grid, q)
     else:
-        nn = scene.tree.query(flat, workers=-1)[1]
-    tv = surface_vectors(queries, scene.points, scene.normals, nn.reshape(queries.shape[:2]),
-                         scene.spacing, vectors)
-    shortfall = (table.max_terms - keypoint_terms(table, slice(0, table.n), orient[pick], tv)).mean(0)
+        def nearest(q):
+            return scene.tree.query(q, workers=-1)[1]
+    terms = all_terms(scene.points[pair_point[pick]], orient[pick], table, scene, vectors, nearest)
+    shortfall = (table.max_terms - terms).mean(0)
     return np.argsort(-shortfall, kind="stable")
 
 

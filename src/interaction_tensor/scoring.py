@@ -249,17 +249,27 @@ def score_pairs(points: np.ndarray, orient: np.ndarray, table: KeypointTable, sc
     return PairScores(score, accepted, decided_at, comparisons)
 
 
+def all_terms(points: np.ndarray, orient: np.ndarray, table: KeypointTable, scene,
+              vectors: str, nearest) -> np.ndarray:
+    """(P, N) terms of every keypoint of every pair, no early exit.
+
+    ``nearest`` maps (Q, 3) queries to the indices of their nearest scene points.
+    """
+    queries = points[:, None, :] + table.offsets[orient]
+    nn = np.asarray(nearest(queries.reshape(-1, 3))).reshape(queries.shape[:2])
+    test_vectors = surface_vectors(queries, scene.points, scene.normals, nn, scene.spacing,
+                                   vectors)
+    return keypoint_terms(table, slice(0, table.n), orient, test_vectors)
+
+
 def score_pairs_exact(points: np.ndarray, orient: np.ndarray, table: KeypointTable, scene,
                       threshold: float, vectors: str = "surface") -> PairScores:
     """Reference: every keypoint of every pair, one batched cKDTree query, no early exit."""
     from scipy.spatial import cKDTree
 
     tree = cKDTree(scene.points)
-    queries = points[:, None, :] + table.offsets[orient]
-    _, nn = tree.query(queries.reshape(-1, 3), workers=-1)
-    test_vectors = surface_vectors(queries, scene.points, scene.normals,
-                                   nn.reshape(queries.shape[:2]), scene.spacing, vectors)
-    terms = keypoint_terms(table, slice(0, table.n), orient, test_vectors)
+    terms = all_terms(points, orient, table, scene, vectors,
+                      lambda q: tree.query(q, workers=-1)[1])
     score = terms.sum(axis=1)
     accepted = score >= threshold - 1e-12
     return PairScores(score, accepted, np.full(len(points), table.n), terms.size)
