@@ -302,8 +302,8 @@ NOTES = """## Where the time goes, and what was tried
   thread, 2026-11-21): 85 % lie within 2 cm of a surface and cost 310-360 ns each; 14 % at
   2-5 cm, 660 ns; 2 % beyond 5 cm, 1.9-4.7 us; 326 ns on average. The rest of a comparison
   costs about 0.05 us. Queries taken in grid order cost far less than scattered ones
-  (queries on samples: 62 ns in grid order against 606 ns in random order; 2 mm off the
-  samples, in grid order: 146 ns), but reordering the work for locality did not help inside
+  (queries on samples: 58 ns in grid order against 393 ns in random order; 2 mm off the
+  samples, in grid order: 137 ns), but reordering the work for locality did not help inside
   the scoring kernel: test points in grid order, and groups of 8 or 32 neighbouring test
   points compared keypoint by keypoint so that consecutive queries are centimetres apart,
   took 11.0-14.2 s against 11.6-13.2 s (5 % test points, run-to-run noise).
