@@ -340,8 +340,9 @@ NOTES = """## Where the time goes, and what was tried
   degrees (quartiles). The mean accepted score drops from 0.842 to 0.815, next to the 0.807
   threshold. Exact search for keypoints within 5 cm of the voxel's sample and the table
   beyond: 99.86 %, top 5 differ, and only 1.5x faster once filled (the near keypoints are
-  the many). Using the table's sample only as the starting bound of the exact search stays
-  exact but saves 9 % once filled (10.4 s), less than the filling costs.
+  the many; both timings of this one were taken beside another job). Using the table's
+  sample only as the starting bound of the exact search stays exact but saves 9 % once
+  filled (10.4 s), less than the filling costs.
 - A decision cannot need fewer comparisons than the threshold allows: with the calibrated
   threshold (about 0.81 of the maximum here) an acceptance needs at least 413 of 512
   keypoints and a rejection at least about 50, so an exact single-descriptor detection stays
