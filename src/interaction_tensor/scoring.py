@@ -108,6 +108,52 @@ def permuted(table: KeypointTable, order: np.ndarray) -> KeypointTable:
                    weights=table.weights[order], max_terms=table.max_terms[order])
 
 
+@dataclass(frozen=True)
+class ArrayOps:
+    """The few array functions the scoring formulas need that NumPy and torch spell
+    differently; everything else in :func:`vector_terms` and :func:`onto_disks` is operators
+    and methods both share. ``NUMPY_OPS`` here, ``torch_backend.torch_ops()`` for torch."""
+
+    where: object
+    sqrt: object
+    exp: object
+    as_float: object                # bool array -> float64 array
+
+
+NUMPY_OPS = ArrayOps(np.where, np.sqrt, np.exp, lambda b: b.astype(np.float64))
+
+
+def _length(v, ops: ArrayOps):
+    """Length of 3-vectors along the last axis (summed x, y, z in that order, as the Numba
+    kernel does)."""
+    return ops.sqrt((v * v).sum(-1))
+
+
+def vector_terms(table: KeypointTable, prov, test_vectors, pn, weights, big_w, cos_lim,
+                 ops: ArrayOps = NUMPY_OPS):
+    """Normalised contribution of each keypoint, given its provenance and test vector.
+
+    Parameters
+    ----------
+    prov, test_vectors : (..., K, 3) provenance and test vectors (arrays of ``ops``' library)
+    pn, weights, big_w, cos_lim : (K,) |p|, weights, W and the cosine limit of those keypoints
+    ops : NumPy's or torch's functions
+
+    Returns (..., K) float64 contributions, each in [0, max_terms].
+    """
+    vn = _length(test_vectors, ops)
+    if table.criterion == "paper":
+        den = pn * vn
+        cosang = ops.where(den > 0, (prov * test_vectors).sum(-1) / ops.where(den > 0, den, 1.0),
+                           0.0)
+        theta_ok = cosang >= cos_lim                  # angle <= W theta_max, without acos
+        delta_ok = theta_ok & (abs(pn - vn) <= big_w * pn / table.c)
+        return (ops.as_float(theta_ok) + ops.as_float(delta_ok)) / (2 * table.n)
+    d = _length(test_vectors - prov, ops) / pn.clip(min=1e-12)
+    sigma = table.a * (1.0 + weights)
+    return weights * ops.exp(-d * d / (2 * sigma * sigma)) / float(table.weights.sum())
+
+
 def keypoint_terms(table: KeypointTable, k: slice, orient: np.ndarray,
                    test_vectors: np.ndarray) -> np.ndarray:
     """Normalised contributions of keypoints ``k`` for pairs in orientations ``orient``.
@@ -121,21 +167,9 @@ def keypoint_terms(table: KeypointTable, k: slice, orient: np.ndarray,
     Returns (P, K) float64, each in [0, max_terms[k]].
     """
     p = table.provenance[orient, k]                 # (P, K, 3)
-    w = table.weights[k]
-    pn = np.linalg.norm(p, axis=-1)
-    vn = np.linalg.norm(test_vectors, axis=-1)
-    if table.criterion == "paper":
-        big_w, cos_lim = paper_limits(table)
-        big_w, cos_lim = big_w[k], cos_lim[k]
-        denom = pn * vn
-        cosang = np.divide(np.einsum("pki,pki->pk", p, test_vectors), denom,
-                           out=np.zeros_like(denom), where=denom > 0)
-        theta_ok = cosang >= cos_lim                  # angle <= W theta_max
-        delta_ok = theta_ok & (np.abs(pn - vn) <= big_w * pn / table.c)
-        return (theta_ok.astype(np.float64) + delta_ok) / (2 * table.n)
-    d = np.linalg.norm(test_vectors - p, axis=-1) / np.maximum(pn, 1e-12)
-    sigma = table.a * (1.0 + w)
-    return (w * np.exp(-d * d / (2 * sigma * sigma))) / table.weights.sum()
+    big_w, cos_lim = paper_limits(table)
+    return vector_terms(table, p, test_vectors, _length(p, NUMPY_OPS), table.weights[k],
+                        big_w[k], cos_lim[k])
 
 
 VECTOR_MODES = ("surface", "points")
@@ -159,11 +193,16 @@ def surface_vectors(queries: np.ndarray, points: np.ndarray, normals: np.ndarray
     d = points[nn] - queries
     if mode == "points":
         return d
-    n = normals[nn]
-    along = np.einsum("...i,...i->...", d, n)[..., None] * n
+    return onto_disks(d, normals[nn], radius)
+
+
+def onto_disks(d, n, radius: float, ops: ArrayOps = NUMPY_OPS):
+    """Vectors ``d`` to samples of normals ``n`` (both (..., 3)), shortened to the nearest
+    point of each sample's disk of ``radius`` in its tangent plane."""
+    along = (d * n).sum(-1)[..., None] * n
     lateral = d - along
-    lat = np.linalg.norm(lateral, axis=-1, keepdims=True)
-    shrink = np.divide(np.maximum(lat - radius, 0.0), lat, out=np.zeros_like(lat), where=lat > 0)
+    lat = _length(lateral, ops)[..., None]
+    shrink = ops.where(lat > radius, (lat - radius) / ops.where(lat > 0, lat, 1.0), 0.0)
     return along + lateral * shrink
 
 

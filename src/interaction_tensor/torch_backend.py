@@ -19,12 +19,18 @@ from __future__ import annotations
 import numpy as np
 
 from .errors import SettingsError
-from .scoring import PairScores, paper_limits
+from .scoring import ArrayOps, PairScores, onto_disks, paper_limits, vector_terms
 
 #: Largest candidate-distance matrix computed at once (entries), to bound device memory.
 MAX_BLOCK = 1 << 25
 #: Largest number of tiles.
 MAX_TILES = 2_000_000
+
+
+def torch_ops() -> ArrayOps:
+    """torch's spelling of the array functions the shared scoring formulas use."""
+    torch = import_torch()
+    return ArrayOps(torch.where, torch.sqrt, torch.exp, lambda b: b.to(torch.float64))
 
 
 def import_torch():
@@ -156,7 +162,8 @@ def score_pairs_torch(points: np.ndarray, orient: np.ndarray, table, index: Torc
     offsets = torch.as_tensor(table.offsets, dtype=f64, device=dev)
     prov = torch.as_tensor(table.provenance, dtype=f64, device=dev)
     w = torch.as_tensor(table.weights, dtype=f64, device=dev)
-    pn = torch.linalg.vector_norm(prov[0], dim=1)
+    pn = torch.sqrt((prov[0] * prov[0]).sum(-1))
+    ops = torch_ops()
     rest = np.r_[np.cumsum(table.max_terms[::-1])[::-1], 0.0]
     rest_next = torch.as_tensor(rest[1:], dtype=f64, device=dev)
     big_w, cos_lim = (torch.as_tensor(a, dtype=f64, device=dev) for a in paper_limits(table))
@@ -172,27 +179,8 @@ def score_pairs_torch(points: np.ndarray, orient: np.ndarray, table, index: Torc
         nn = index.nearest(q.reshape(-1, 3)).reshape(q.shape[:2])
         v = index.points[nn] - q
         if vectors == "surface":
-            nrm = index.normals[nn]
-            along = (v * nrm).sum(-1, keepdim=True) * nrm
-            lateral = v - along
-            lat = torch.linalg.vector_norm(lateral, dim=-1, keepdim=True)
-            shrink = torch.where(lat > index.scene.spacing,
-                                 (lat - index.scene.spacing) / torch.where(lat > 0, lat, 1.0),
-                                 torch.zeros_like(lat))
-            v = along + lateral * shrink
-        p = prov[o]
-        vn = torch.linalg.vector_norm(v, dim=-1)
-        if table.criterion == "paper":
-            den = pn * vn
-            cosang = torch.where(den > 0, (p * v).sum(-1) / torch.where(den > 0, den, 1.0),
-                                 torch.zeros_like(den))
-            theta = cosang >= cos_lim
-            delta = theta & ((pn - vn).abs() <= big_w * pn / table.c)
-            terms = (theta.to(f64) + delta.to(f64)) / (2.0 * n)
-        else:
-            d = torch.linalg.vector_norm(v - p, dim=-1) / pn.clamp(min=1e-12)
-            sigma = table.a * (1.0 + w)
-            terms = w * torch.exp(-d * d / (2.0 * sigma * sigma)) / w.sum()
+            v = onto_disks(v, index.normals[nn], float(index.scene.spacing), ops)
+        terms = vector_terms(table, prov[o], v, pn, w, big_w, cos_lim, ops)
         cs = torch.cumsum(terms, dim=1)
         reach = cs >= threshold - eps
         lost = cs + rest_next < threshold - eps
