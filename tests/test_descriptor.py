@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
-from interaction_tensor.sampling import uniform_keypoints, weighted_keypoints
+from interaction_tensor.sampling import (mean_spacing, uniform_keypoints, unique_rows,
+                                         weighted_keypoints)
 
 from conftest import plane
 
@@ -53,6 +54,23 @@ def test_weighted_sampling_is_proportional_to_weight():
     ratio = counts[:1000].mean() / counts[1000:].mean()
     assert 3.4 < ratio < 4.7
     assert set(weighted_keypoints(np.r_[np.zeros(10), np.ones(3)], 5, 0)) >= {10, 11, 12}
+
+
+def test_mean_spacing_of_a_grid_ignores_duplicates():
+    # a 4 mm square grid on the plane z = 0.3 x: 1 / sqrt(points per m^2 of the plane) is
+    # 4 mm * 1.09^(1/4), with or without every third point repeated (scans and converted
+    # clouds repeat points)
+    g = np.stack(np.meshgrid(np.arange(150), np.arange(150)), -1).reshape(-1, 2) * 0.004
+    pts = np.c_[g, 0.3 * g[:, 0]] + [-1.0, 2.0, 0.5]
+    assert mean_spacing(pts) == pytest.approx(0.004 * 1.09 ** 0.25, rel=0.03)
+    assert mean_spacing(np.r_[pts, pts[::3]]) == pytest.approx(mean_spacing(pts), rel=1e-9)
+
+
+def test_unique_rows_is_numpys_unique():
+    rng = np.random.default_rng(4)
+    a = rng.integers(-5, 5, size=(3000, 3))
+    np.testing.assert_array_equal(unique_rows(a), np.unique(a, axis=0))
+    assert unique_rows(a[:0]).shape == (0, 3)
 
 
 def test_uniform_sampling_covers_without_repeats():

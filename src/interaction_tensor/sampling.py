@@ -67,6 +67,15 @@ def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = Non
     return normals
 
 
+def unique_rows(a: np.ndarray) -> np.ndarray:
+    """The distinct rows of a 2-D integer array in lexicographic order, as
+    ``np.unique(a, axis=0)`` gives them, about twice as fast (one lexsort, no void view)."""
+    if len(a) == 0:
+        return a.copy()
+    s = a[np.lexsort(a.T[::-1])]
+    return s[np.r_[True, np.any(s[1:] != s[:-1], axis=1)]]
+
+
 def mean_spacing(points: np.ndarray, tree: cKDTree | None = None, sample: int = 2000,
                  seed: int = 0) -> float:
     """Sampling spacing (m) of a surface point cloud: 1 / sqrt(points per square metre).
@@ -77,7 +86,7 @@ def mean_spacing(points: np.ndarray, tree: cKDTree | None = None, sample: int = 
     do not count.
     """
     rng = np.random.default_rng(seed)
-    unique = np.unique(np.round(points / 1e-6).astype(np.int64), axis=0) * 1e-6
+    unique = unique_rows(np.round(points / 1e-6).astype(np.int64)) * 1e-6
     if len(unique) < 3:
         return 0.0
     utree = cKDTree(unique) if (tree is None or len(unique) != len(points)) else tree
