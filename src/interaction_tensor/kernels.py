@@ -127,9 +127,8 @@ def _job_args(job: ScoreJob, grid: Grid) -> tuple:
     t = job.table
     pnorm = np.ascontiguousarray(np.linalg.norm(t.provenance[0], axis=1))
     big_w, cos_lim = paper_limits(t)
-    rest = np.r_[np.cumsum(t.max_terms[::-1])[::-1], 0.0]
     return (np.ascontiguousarray(t.offsets), np.ascontiguousarray(t.provenance), pnorm,
-            np.ascontiguousarray(t.weights), cos_lim, big_w, t.max_terms, rest,
+            np.ascontiguousarray(t.weights), cos_lim, big_w, t.max_terms, t.rest,
             0 if t.criterion == "paper" else 1, t.c, t.a, float(t.weights.sum()),
             float(job.threshold), bool(job.early_exit), job.vectors == "surface",
             float(job.rho), grid.points, grid.normals, grid.starts, grid.seed, grid.origin, grid.cell,

@@ -52,6 +52,12 @@ class KeypointTable:
     def n(self) -> int:
         return self.weights.shape[0]
 
+    @property
+    def rest(self) -> np.ndarray:
+        """(N + 1,) largest score keypoints k..N-1 can still add (0 after the last): the
+        early exit's upper bound."""
+        return np.r_[np.cumsum(self.max_terms[::-1])[::-1], 0.0]
+
 
 def rotation_z(angles: np.ndarray) -> np.ndarray:
     """(K, 3, 3) rotations about +Z (counter-clockwise) by ``angles`` (radians)."""
@@ -246,8 +252,7 @@ def score_pairs(points: np.ndarray, orient: np.ndarray, table: KeypointTable, sc
     decided_at = np.full(n_pairs, n, dtype=np.int64)
     decided = np.zeros(n_pairs, bool)
     accepted = np.zeros(n_pairs, bool)
-    # rest[k] = largest score still obtainable from keypoints k..N-1
-    rest = np.r_[np.cumsum(table.max_terms[::-1])[::-1], 0.0]
+    rest = table.rest
     alive = np.arange(n_pairs)
     comparisons = 0
     eps = 1e-12

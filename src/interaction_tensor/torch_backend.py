@@ -164,8 +164,7 @@ def score_pairs_torch(points: np.ndarray, orient: np.ndarray, table, index: Torc
     w = torch.as_tensor(table.weights, dtype=f64, device=dev)
     pn = torch.sqrt((prov[0] * prov[0]).sum(-1))
     ops = torch_ops()
-    rest = np.r_[np.cumsum(table.max_terms[::-1])[::-1], 0.0]
-    rest_next = torch.as_tensor(rest[1:], dtype=f64, device=dev)
+    rest_next = torch.as_tensor(table.rest[1:], dtype=f64, device=dev)
     big_w, cos_lim = (torch.as_tensor(a, dtype=f64, device=dev) for a in paper_limits(table))
     eps = 1e-12
     out_s = np.zeros(len(points))
