@@ -308,12 +308,10 @@ def all_terms(points: np.ndarray, orient: np.ndarray, table: KeypointTable, scen
 
 def score_pairs_exact(points: np.ndarray, orient: np.ndarray, table: KeypointTable, scene,
                       threshold: float, vectors: str = "surface") -> PairScores:
-    """Reference: every keypoint of every pair, one batched cKDTree query, no early exit."""
-    from scipy.spatial import cKDTree
-
-    tree = cKDTree(scene.points)
+    """Reference: every keypoint of every pair, one batched query of the scene's cKDTree, no
+    early exit."""
     terms = all_terms(points, orient, table, scene, vectors,
-                      lambda q: tree.query(q, workers=-1)[1])
+                      lambda q: scene.tree.query(q, workers=-1)[1])
     score = terms.sum(axis=1)
     accepted = score >= threshold - 1e-12
     return PairScores(score, accepted, np.full(len(points), table.n), terms.size)
