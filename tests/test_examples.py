@@ -38,11 +38,103 @@ def test_procedural_example_is_posed_in_contact_and_valid(name):
     assert verdict.valid, verdict.reasons
 
 
+def _gaps(ex, count=60000):
+    q = interactions.surface_points(ex.query, count)
+    s = interactions.surface_points(ex.scene_object, 300000, 1)
+    return q, s, cKDTree(s).query(q)[0]
+
+
+def _objects(real):
+    if not real:
+        return None
+    objects = SHARED_DATA / "objects"
+    if not (objects / "ycb_mug.ply").exists():
+        pytest.skip("shared data not found")
+    return objects
+
+
+@pytest.mark.parametrize("real", [False, True])
+@pytest.mark.parametrize("name", ["placing-bowl", "placing-bottle"])
+def test_placed_object_stands_on_the_table_top(name, real):
+    ex = interactions.build(name, _objects(real))
+    q, _, gap = _gaps(ex)
+    bottom = q[:, 2] <= q[:, 2].min() + 0.002
+    assert abs(q[:, 2].min() - 0.75) < 0.002               # resting on the top at 0.75 m
+    assert gap[bottom].max() < 0.006
+    assert np.linalg.norm(q.mean(axis=0)[:2]) < 0.03       # centred on the table
+
+
+@pytest.mark.parametrize("real", [False, True])
+@pytest.mark.parametrize("name", ["filling-mug", "filling-cup"])
+def test_mug_stands_in_the_basin_under_the_tap_outlet(name, real):
+    ex = interactions.build(name, _objects(real))
+    q, _, gap = _gaps(ex)
+    assert abs(q[:, 2].min() - shapes.SINK_BOTTOM) < 0.002      # on the basin bottom
+    rim = q[q[:, 2] >= q[:, 2].max() - 0.005]
+    centre = rim[:, :2].mean(axis=0)
+    radius = np.linalg.norm(rim[:, :2] - centre, axis=1).max()
+    ox, oy, oz = shapes.TAP_OUTLET
+    assert np.hypot(ox - centre[0], oy - centre[1]) < 0.6 * radius   # outlet over the opening
+    assert 0.02 < oz - q[:, 2].max() < 0.30                        # 2-30 cm above the rim
+
+
+@pytest.mark.parametrize("name", ["hanging-hanger", "hanging-handbag"])
+def test_hook_hangs_on_the_rail(name):
+    ex = interactions.build(name)
+    q, _, gap = _gaps(ex)
+    top = shapes.RAIL_HEIGHT + shapes.RAIL_RADIUS
+    assert gap.min() < 0.002                                   # touching the rail
+    touching = q[gap < 0.003]
+    assert touching[:, 2].min() > top - 0.004                  # ... on its top
+    assert np.abs(touching[:, 0]).max() < 0.015
+    centre, inner, axis = ex.loop
+    rail_axis = np.array([0.0, shapes.RAIL_HEIGHT])
+    assert np.linalg.norm(centre[[0, 2]] - rail_axis) < inner - shapes.RAIL_RADIUS + 0.002
+    assert q.mean(axis=0)[2] < shapes.RAIL_HEIGHT - 0.05       # hangs below the rail
+
+
+@pytest.mark.parametrize("real", [False, True])
+def test_seated_person_sits_on_the_seat_with_feet_on_the_floor(real):
+    ex = interactions.build("sitting-human", _objects(real))
+    top = ex.support_point[2]
+    assert ex.scene_object.vertices[:, 2].max() == pytest.approx(top, abs=1e-9)
+    zs, seat = interactions.seat_region(ex.query)
+    stool = ex.scene_object.vertices
+    lo, hi = stool[:, :2].min(axis=0), stool[:, :2].max(axis=0)
+    faces = seat[(seat[:, 2] <= zs + 0.01)]                    # the seat faces: thighs, buttocks
+    over = np.all((faces[:, :2] > lo) & (faces[:, :2] < hi), axis=1)
+    assert over.mean() > 0.6                                   # mostly over the stool ...
+    d = cKDTree(interactions.surface_points(ex.scene_object, 300000, 1)).query(faces[over])[0]
+    assert zs == pytest.approx(top, abs=0.002)
+    assert np.quantile(d, 0.95) < 0.01                         # ... within 1 cm of its top
+    assert ex.query.vertices[:, 2].min() == pytest.approx(0.0, abs=1e-9)   # feet on the floor
+    assert ex.scene_object.vertices[:, 2].min() == pytest.approx(0.0, abs=1e-9)
+    # nothing of the person is under the seat top except the legs in front of it
+    q = interactions.surface_points(ex.query, 60000)
+    stool = ex.scene_object.vertices
+    over = np.all((q[:, :2] > lo) & (q[:, :2] < hi), axis=1)
+    assert q[over, 2].min() > top - 0.002
+
+
+@pytest.mark.parametrize("real", [False, True])
+def test_rider_sits_on_the_seat_hands_on_the_grips_feet_on_the_pegs(real):
+    ex = interactions.build("riding-human", _objects(real))
+    q, s, gap = _gaps(ex)
+    sp = ex.support_point                                      # the seat's top centre
+    seat = ((np.abs(q[:, 0] - sp[0]) <= 0.12) & (np.abs(q[:, 1] - sp[1]) <= 0.08)
+            & (np.abs(q[:, 2] - sp[2]) < 0.05))
+    assert gap[seat].min() < 0.006                             # the rider sits on the seat
+    feet = q[:, 2] < q[:, 2].min() + 0.01
+    assert gap[feet].min() < 0.01
+    for side in (1, -1):                                       # each hand on a grip
+        hand = (q[:, 1] * side > 0.15) & (q[:, 0] > 0.15) & (q[:, 2] > 0.8)
+        assert gap[hand].min() < 0.02
+    assert s[:, 2].min() == pytest.approx(0.0, abs=0.005)      # wheels on the ground
+
+
 def test_sizes_are_realistic():
     assert np.ptp(shapes.mug().vertices[:, 2]) == pytest.approx(0.095, abs=0.002)
     assert shapes.stool().vertices[:, 2].max() == pytest.approx(0.45)
-    ex = interactions.build("sitting-human")
-    assert ex.query.vertices[:, 2].min() == pytest.approx(0.0, abs=0.01)   # feet on the floor
     bike = interactions.build("riding-human").scene_object
     assert bike.vertices[:, 2].min() == pytest.approx(0.0, abs=0.005)      # wheels on the ground
 

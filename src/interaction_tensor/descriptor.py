@@ -26,7 +26,9 @@ from .scoring import surface_vectors
 from .settings import TrainSettings
 
 FORMAT = "interaction-tensor-descriptor"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: Versions this code reads: 1 has no clearance points (the clearance test is then skipped).
+READABLE_VERSIONS = (1, 2)
 #: Scene-object normals within this angle of the N_aff line may hold the reference point.
 REFERENCE_NORMAL_DEG = 30.0
 
@@ -67,6 +69,8 @@ class InteractionTensor:
     weighted, uniform : the two keypoint sets
     query_vertices, query_faces : the query object as given (faces (0, 3) for a cloud)
     contact_points : (C, 3) query samples that touch the scene-object in the example
+    clearance_points : (K, 3) query surface samples, training frame (iTClearance)
+    clearance_radius : (K,) free space (m) around each in the example, at most clearance_max
     scene_points : (S, 3) scene-object samples used for the Voronoi step (subsampled)
     scene_spacing : spacing (m) of the scene-object samples; detection samples at it
     vectors : ``surface`` or ``points``, how provenance (and test) vectors are measured
@@ -91,6 +95,8 @@ class InteractionTensor:
     scene_points: np.ndarray
     scene_spacing: float
     vectors: str = "surface"
+    clearance_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    clearance_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
     thresholds: dict = field(default_factory=dict)
     self_scores: dict = field(default_factory=dict)
     meta: dict = field(default_factory=dict)
@@ -198,7 +204,17 @@ class InteractionTensor:
             sets[name] = Keypoints(bis[idx], prov[idx], weights[idx])
         timings["keypoints"] = time.perf_counter() - t2
 
-        # 5. reference point, contact ---------------------------------------------------
+        # 5. clearance: free space around the query (iTClearance) ------------------------------
+        k = min(settings.clearance_points, len(q_pts))
+        c_idx = np.sort(np.random.default_rng(settings.seed + 4).choice(len(q_pts), k,
+                                                                         replace=False))
+        c_pts = q_pts[c_idx]
+        _, c_nn = gap_tree.query(c_pts, workers=-1)
+        c_free = np.linalg.norm(surface_vectors(c_pts, s_pts, s_nrm, c_nn,
+                                                settings.scene_spacing, "surface"), axis=1)
+        c_rad = np.minimum(c_free, settings.clearance_max)
+
+        # 6. reference point, contact ---------------------------------------------------
         ref, contact = _reference_point(q_pts, gaps, s_pts, s_nrm, normal,
                                         settings.contact_tolerance, settings.scene_spacing)
         if reference_point is not None:
@@ -219,9 +235,9 @@ class InteractionTensor:
             uniform=sets["uniform"], query_vertices=np.asarray(qv, float),
             query_faces=np.asarray(qf, np.int64), contact_points=contact,
             scene_points=keep_scene, scene_spacing=float(settings.scene_spacing),
-            vectors=settings.vectors)
+            vectors=settings.vectors, clearance_points=c_pts, clearance_radius=c_rad)
 
-        # 6. calibration: the example scored against a re-sampled copy of itself ----------
+        # 7. calibration: the example scored against a re-sampled copy of itself ----------
         say("calibration")
         t3 = time.perf_counter()
         tensor._calibrate(scene_object, settings)
@@ -274,6 +290,7 @@ class InteractionTensor:
             "provenance_vectors": self.provenance_vectors, "weights": self.weights,
             "query_vertices": self.query_vertices, "query_faces": self.query_faces,
             "contact_points": self.contact_points, "scene_points": self.scene_points,
+            "clearance_points": self.clearance_points, "clearance_radius": self.clearance_radius,
         }
         for name in ("weighted", "uniform"):
             kp = self.keypoints(name)
@@ -305,9 +322,10 @@ class InteractionTensor:
             raise InputError(path, "not a descriptor file (no readable header)") from None
         if header.get("format") != FORMAT:
             raise InputError(path, "not an interaction-tensor descriptor")
-        if header.get("format_version") != FORMAT_VERSION:
+        if header.get("format_version") not in READABLE_VERSIONS:
             raise InputError(path, f"descriptor format version {header.get('format_version')} "
-                                   f"is not supported (this version reads {FORMAT_VERSION})")
+                                   "is not supported (this version reads "
+                                   f"{', '.join(map(str, READABLE_VERSIONS))})")
         try:
             sets = {name: Keypoints(arrays[f"{name}_points"], arrays[f"{name}_provenance"],
                                     arrays[f"{name}_weights"]) for name in ("weighted", "uniform")}
@@ -320,6 +338,8 @@ class InteractionTensor:
                 query_vertices=arrays["query_vertices"], query_faces=arrays["query_faces"],
                 contact_points=arrays["contact_points"], scene_points=arrays["scene_points"],
                 scene_spacing=float(header["scene_spacing"]), vectors=header["vectors"],
+                clearance_points=arrays.get("clearance_points", np.zeros((0, 3))),
+                clearance_radius=arrays.get("clearance_radius", np.zeros(0)),
                 thresholds=header["thresholds"],
                 self_scores=header["self_scores"], meta=header.get("meta", {}))
         except KeyError as exc:
@@ -346,6 +366,7 @@ class InteractionTensor:
             "query_object": {"vertices": int(len(self.query_vertices)),
                              "faces": int(len(self.query_faces))},
             "contact_points": int(len(self.contact_points)),
+            "clearance_points": int(len(self.clearance_points)),
             "thresholds": self.thresholds, "self_scores": self.self_scores,
             "meta": self.meta,
         }

@@ -92,7 +92,11 @@ class Detection:
     test_indices : (T,) scene indices drawn as test points
     candidate_indices : (C,) test points that passed the normal filter
     pair_point, pair_orientation : (P,) scene index and orientation of every scored pair
-    pairs : PairScores of those pairs
+    pairs : PairScores of those pairs; ``pairs.accepted`` is the final decision (score and
+        clearance)
+    score_accepted : (P,) bool, accepted by the score alone
+    clearance_violations : (P,) int, clearance points violated (-1 where not tested: pairs
+        the score rejected, or no clearance test)
     heat : (N,) per scene point: best accepted score near it (0 where none)
     accepted_count : (N,) accepted orientations at each scene point
     predictions : top-k after suppression, best first
@@ -112,6 +116,11 @@ class Detection:
     accepted_count: np.ndarray
     predictions: list = field(default_factory=list)
     stats: dict = field(default_factory=dict)
+    score_accepted: np.ndarray | None = None
+    clearance_violations: np.ndarray | None = None
+    #: (N + 1,) the largest score keypoints k.. can still add, in the order they were
+    #: compared: ``score + rest[decided_at]`` bounds a rejected pair's full score
+    rest: np.ndarray | None = None
 
     @property
     def accepted(self) -> np.ndarray:
@@ -220,8 +229,29 @@ def _score_all(scene, jobs, backend, index, settings, progress, label):
     return [PairScores(t, a, d, c) for t, a, d, c in zip(totals, acc, at, cmp_)]
 
 
+def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_orient,
+                    pairs: PairScores, grid=None):
+    """Apply the clearance test to the pairs the score accepted (in place on
+    ``pairs.accepted``). Returns (score_accepted (P,) bool, violations (P,) int, -1 where not
+    tested)."""
+    from .clearance import clearance_offsets, nearest_distance_function, violations
+
+    score_acc = pairs.accepted.copy()
+    viol = np.full(len(pairs.accepted), -1, np.int64)
+    k = len(tensor.clearance_points)
+    if not settings.clearance or k == 0:
+        return score_acc, viol
+    idx = np.flatnonzero(score_acc)
+    tol = settings.clearance_tolerance
+    viol[idx] = violations(scene.points[pair_point[idx]], pair_orient[idx],
+                           clearance_offsets(tensor, settings.n_orientations),
+                           tensor.clearance_radius, tol, nearest_distance_function(scene, grid))
+    pairs.accepted[idx[viol[idx] > settings.clearance_max_violations * k]] = False
+    return score_acc, viol
+
+
 def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair_orient,
-            pairs, timings, backend, t0, device="cpu") -> Detection:
+            pairs, timings, backend, t0, device="cpu", clearance=None, rest=None) -> Detection:
     """Heat map, top-k with suppression, statistics."""
     n_o = settings.n_orientations
     t3 = time.perf_counter()
@@ -240,12 +270,15 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
     timings["predictions"] = time.perf_counter() - t3
     timings["total"] = time.perf_counter() - t0
     decided = pairs.decided_at
+    score_acc, viol = clearance if clearance is not None else (pairs.accepted.copy(), None)
     stats = {
         "scene_points": int(len(scene)),
         "test_points_sampled": int(len(test_idx)),
         "candidates_after_normal_filter": int(len(cand)),
         "pairs_scored": int(len(pair_point)),
         "pairs_accepted": int(pairs.accepted.sum()),
+        "pairs_accepted_by_score": int(score_acc.sum()),
+        "pairs_failing_clearance": int((score_acc & ~pairs.accepted).sum()),
         "keypoint_comparisons": int(pairs.comparisons),
         "keypoint_comparisons_to_decision": int(decided.sum()),
         "mean_comparisons_per_decision": float(decided.mean()) if len(decided) else 0.0,
@@ -262,7 +295,7 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
                                    if timings.get("scoring", 0) > 0 else None),
     }
     return Detection(scene, tensor, settings, threshold, test_idx, cand, pair_point,
-                     pair_orient, pairs, heat, count, predictions, stats)
+                     pair_orient, pairs, heat, count, predictions, stats, score_acc, viol, rest)
 
 
 def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = None,
@@ -306,11 +339,108 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     label = tensors[0].affordance if len(tensors) == 1 else f"{len(tensors)} affordances"
     scores = _score_all(scene, jobs, backend, index, settings, progress, label)
     timings["scoring"] = time.perf_counter() - t2
+    t3 = time.perf_counter()
+    grid = index if backend == "numba" else None
+    clear = [check_clearance(scene, tensor, settings, pp, po, pairs, grid)
+             for tensor, pp, po, pairs in zip(tensors, pp_list, po_list, scores)]
+    timings["clearance"] = time.perf_counter() - t3
     device = str(index.device) if backend == "torch" else "cpu"
     return [_finish(scene, tensor, settings, job.threshold, test_idx, cand, pp, po, pairs,
-                    dict(timings), backend, t0, device)
-            for tensor, job, cand, pp, po, pairs in zip(tensors, jobs, cands, pp_list,
-                                                        po_list, scores)]
+                    dict(timings), backend, t0, device, cl, job.table.rest)
+            for tensor, job, cand, pp, po, pairs, cl in zip(tensors, jobs, cands, pp_list,
+                                                            po_list, scores, clear)]
+
+
+def full_scores(det: Detection, idx: np.ndarray):
+    """Full scores (every keypoint) and clearance of pairs ``idx`` of a detection.
+
+    Returns (scores (I,) float64, clearance_ok (I,) bool). Accepted pairs are read off (they
+    were completed); the others are scored again without early exit.
+    """
+    idx = np.asarray(idx, np.int64)
+    st = det.settings
+    scores = det.pairs.score[idx].copy()
+    redo = ~det.score_accepted[idx] if det.score_accepted is not None else ~det.pairs.accepted[idx]
+    if redo.any():
+        sub = idx[redo]
+        table = keypoint_table(det.tensor, st)
+        pts = det.scene.points[det.pair_point[sub]]
+        orient = det.pair_orientation[sub]
+        if resolve_backend(st.backend) == "numba":
+            from .kernels import score_pairs_numba
+
+            scores[redo] = score_pairs_numba(pts, orient, table, det.scene.grid(), 2.0,
+                                             det.tensor.vectors, det.scene.spacing,
+                                             early_exit=False)[0]
+        else:
+            scores[redo] = score_pairs(pts, orient, table, det.scene, 2.0,
+                                       vectors=det.tensor.vectors, early_exit=False).score
+    ok = np.ones(len(idx), bool)
+    k = len(det.tensor.clearance_points)
+    if st.clearance and k:
+        from .clearance import clearance_offsets, nearest_distance_function, violations
+
+        viol = det.clearance_violations[idx].copy()
+        todo = viol < 0
+        if todo.any():
+            tol = st.clearance_tolerance
+            grid = det.scene.grid() if resolve_backend(st.backend) == "numba" else None
+            viol[todo] = violations(det.scene.points[det.pair_point[idx[todo]]],
+                                    det.pair_orientation[idx[todo]],
+                                    clearance_offsets(det.tensor, st.n_orientations),
+                                    det.tensor.clearance_radius, tol,
+                                    nearest_distance_function(det.scene, grid))
+        ok = viol <= st.clearance_max_violations * k
+    return scores, ok
+
+
+def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block: int = 2048,
+               max_evaluations: int = 50_000):
+    """The ``k`` best (or worst) pairs of a detection by full score, ``radius`` apart.
+
+    Best: pairs that pass the clearance test rank before those that do not, then by full
+    score. Worst: by full score alone (lowest first). Rejected pairs kept only a partial score; their full score lies between it
+    and ``score + rest[decided_at]``, so pairs are scored fully in the order of those bounds
+    until no unscored pair can enter the k (branch and bound: exact, up to
+    ``max_evaluations`` pairs scored again).
+
+    Returns (indices into the pair arrays (<= k,), full scores, clearance_ok), best first
+    (worst first when ``worst``).
+    """
+    from .predictions import top_k
+
+    n = len(det.pairs.score)
+    if n == 0 or k <= 0:
+        return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, bool)
+    score = det.pairs.score
+    done = det.score_accepted if det.score_accepted is not None else det.pairs.accepted
+    rest = det.rest if det.rest is not None else keypoint_table(det.tensor, det.settings).rest
+    upper = np.where(done, score, score + rest[det.pairs.decided_at])
+    # optimistic key of a pair not scored yet: the key is (2 if clearance ok) + full score for
+    # the best, -full score for the worst
+    bound = -score if worst else upper + 2.0
+    order = np.argsort(-bound, kind="stable")
+    key = np.full(n, np.nan)
+    full = np.full(n, np.nan)
+    okv = np.zeros(n, bool)
+    pos = det.scene.points[det.pair_point]
+    cursor = 0
+    picks = []
+    while True:
+        if cursor < n and cursor < max_evaluations:
+            sl = order[cursor:cursor + block]
+            cursor += len(sl)
+            f, ok = full_scores(det, sl)
+            full[sl], okv[sl] = f, ok
+            key[sl] = -f if worst else np.where(ok, 2.0, 0.0) + f
+        have = np.flatnonzero(np.isfinite(key))
+        picks = [int(have[i]) for i in top_k(pos[have], key[have], k, radius)]
+        if cursor >= n or cursor >= max_evaluations:
+            break
+        if len(picks) == k and key[picks[-1]] >= bound[order[cursor]]:
+            break
+    picks = np.asarray(picks, np.int64)
+    return picks, full[picks], okv[picks]
 
 
 def detect(scene: Scene, tensor: InteractionTensor, settings: DetectSettings | None = None,

@@ -55,11 +55,20 @@ class TrainSettings:
     #: training example itself gets on a re-sampled copy of its scene-object (ours; the paper
     #: tunes S_aff by hand per affordance).
     calibration_ratio: float = 0.9
+    #: Clearance points: query surface samples whose free space is recorded (the clearance
+    #: idea of the authors' later iTClearance work: the query needs room, not an identical
+    #: scene-object). 0 disables it (ours).
+    clearance_points: int = 256
+    #: Largest clearance (m) recorded per clearance point: the free space around the query
+    #: that a new scene must leave, up to this (ours).
+    clearance_max: float = 0.02
     #: Seed of every random step of training.
     seed: int = 0
 
     def __post_init__(self):
         _check(self.query_points >= 100, "query_points must be at least 100")
+        _check(self.clearance_points >= 0, "clearance_points must be non-negative")
+        _check(self.clearance_max > 0, "clearance_max must be positive (metres)")
         _check(self.scene_spacing > 0, "scene_spacing must be positive (metres)")
         _check(self.crop_factor >= 1.0, "crop_factor must be at least 1")
         _check(self.n_keypoints >= 8, "n_keypoints must be at least 8")
@@ -116,6 +125,15 @@ class DetectSettings:
     keypoint_order: str = "weight"
     #: Pairs fully scored to measure the adaptive order.
     pilot_pairs: int = 256
+    #: Clearance test (when the descriptor has clearance points): an accepted pair must also
+    #: leave the query room, i.e. no scene sample nearer than ``r - tolerance`` to a clearance
+    #: point whose free space in the example was r (at most ``clearance_max``), at more than
+    #: ``clearance_max_violations`` (a fraction) of the clearance points. A sample is never
+    #: nearer than the surface it lies on, so sampling cannot cause a violation; the
+    #: tolerance only allows the scene a little closer than the example (ours).
+    clearance: bool = True
+    clearance_tolerance: float = 0.005
+    clearance_max_violations: float = 0.02
     #: Predictions kept after non-maximum suppression.
     top_k: int = 10
     #: Suppression radius (m) of the top-k; None: the query object's width (the larger side
@@ -147,6 +165,10 @@ class DetectSettings:
         _check(self.threshold is None or 0 < self.threshold <= 1,
                "threshold must be in (0, 1]")
         _check(self.top_k >= 0, "top_k must be non-negative")
+        _check(self.clearance_tolerance >= 0,
+               "clearance_tolerance must be non-negative (metres)")
+        _check(0 <= self.clearance_max_violations <= 1,
+               "clearance_max_violations must be in [0, 1]")
         _check(self.nms_radius is None or self.nms_radius >= 0, "nms_radius must be >= 0")
         _check(self.scene_spacing is None or self.scene_spacing > 0,
                "scene_spacing must be positive (metres)")

@@ -2,44 +2,63 @@
 
 The paper asked people (Amazon Mechanical Turk) whether a predicted placement was a good
 place for the interaction. No raters are available here, so a predicted pose (a 4x4 taking
-the training-frame query object into the scene) is judged by geometry alone, with the tests
-and thresholds below. None of them looks at the Interaction Tensor, its score or its
-keypoints; they only use the example (query object and scene-object as posed in training),
-the scene mesh and the pose. The thresholds were set from physical reasoning before any
-evaluation run and are not tuned to any detector.
+the training-frame query object into the scene) is judged by geometry alone. None of the tests
+looks at the Interaction Tensor, its score or its keypoints: they use the example (the query
+object, the scene-object and the point the interaction rests on), the scene mesh and the pose.
+Every threshold is in :class:`JudgeSettings`, set from physical reasoning; the judge is
+proven on a labelled set of valid and invalid poses (:mod:`.labelled`), never on a detector's
+output.
 
-1. **No penetration.** The scene is sampled area-uniformly at ``spacing`` = 1 cm (seeded; a
-   1 cm sampling puts several points on any surface crossing a solid more than 1 cm deep).
-   The query object is filled on a voxel grid (pitch 3 mm, or extent / 200 for large
-   objects): ``solid="hull"`` fills its convex hull (mugs, cups, bowls, bottles: something
-   inside their cavity penetrates the interaction as much as something inside their wall),
-   ``solid="mesh"`` fills the closed mesh itself (humans, hanger, handbag, whose concavities
-   are part of the interaction). The depth of a scene point is its Euclidean distance to
-   the outside of the filled grid, less one voxel. Valid when the deepest scene point is at
-   most ``penetration_depth`` = 1 cm inside: this absorbs the voxel quantisation and the
-   1 cm sampling of the detectors' candidate points, but not an object sunk into a surface
-   or passing through furniture. Limits: the scene is a surface, so an object entirely
-   inside a closed piece of furniture without crossing its surface is not seen, and parts of
-   the query thinner than twice the tolerance (a 6 mm hanger hook) cannot reach it.
-2. **Contact like the example.** Contact points are the query samples within
-   ``contact_tolerance`` = 1 cm of the scene-object in the training example. They are split
-   into parts (connected at 3 cm: a seat and two hands and two feet for riding; the foot
-   ring of a bowl); parts holding less than 5 % of the contact points are ignored. Each part
-   must again be in contact: at least half its points within ``contact_distance`` = 2 cm of
-   the scene (1 cm sampling + 1 cm slack). A floating object, or a rider with nothing under
-   the hands, fails.
-3. **Support from below** (placing and sitting). Support points are scene points under the
-   posed query object's footprint (the convex hull of its samples in x-y) at the height of
-   its lowest contact point, from 2 cm below to 1 cm above. The centre of mass (the centroid
-   of the object's area-uniform surface samples, a stand-in for its mass) must project
-   inside the convex hull of the support points in x-y by at least ``support_margin`` = 1 cm.
-   An object half off an edge, or bridging a gap on one rim, fails.
-4. **A tap above** (filling). Scene points must lie above the opening (within 3 cm of its
-   x-y centre, 2 to 30 cm above the rim), and they must not be a ceiling or a shelf: the
-   scene above the rim, within 15 cm of the opening in x-y and 2 to 30 cm higher, covers at
-   most half of that disk (2 cm cells).
+Tests, by affordance (``tests`` in :data:`TESTS`):
 
-A pose is valid when every test that applies passes. :class:`Verdict` keeps each measured
+1. **No penetration** (all). The scene mesh and the query object are tested triangle against
+   triangle with python-fcl (:mod:`.collision`), so thin parts (a 3 mm hook wire, a hanger's
+   rods) are seen however thin they are. Containers (mugs, cups, bowls, bottles) are tested
+   as their convex hull: something inside the cavity penetrates the interaction as much as
+   something inside the wall. Depth is the shortest move (26 directions, a ladder of lengths)
+   that separates the two: at most ``penetration_depth`` = 1 cm (2 cm for a person, whose
+   size and soft seats make a centimetre of sinking normal). A person is rigid only in its
+   core (pelvis, thighs, torso, head): each lower leg (more than 5 cm below the seat) and
+   each arm (more than 8 cm above the seat and 16 cm to the side of the mid-plane, or 20 to
+   50 cm above the seat and 18 cm ahead of it: forearms reaching forward) is tested
+   on its own and may go up to ``limb_penetration`` = 10 cm into the scene, since a real
+   person spreads the knees around a bench, bends them under a low seat and rests the
+   forearms on a table or an armrest.
+2. **Main contact** (all). The example's main contact is the query's surface within 1 cm of
+   the scene-object near the point the interaction rests on, and not below it (the bowl's foot ring, the mug's
+   bottom, the hook's inside top, the thighs and buttocks on the seat, the rider's seat). At
+   least half of it must be within ``contact_distance`` = 2 cm of the scene again: a floating
+   object fails. For a person the main contact is its seat region (its surface within 3 cm
+   above its lowest point near the seat point: buttocks, crotch, thighs), of which 2 %
+   must be within 2 cm of the scene, as a round beam or a narrow arm touches less of it than
+   a flat seat. Other contacts of the example (a rider's hands and feet) are not required:
+   the paper's raters accepted pretend riding without a motorbike.
+3. **Support from below** (placing, filling, sitting). Scene points under the posed object's
+   footprint at the height of the example's support point (2 cm below to 1 cm above) form the support
+   polygon; the centre of mass (the centroid of the object's surface samples) must project
+   inside it by ``support_margin`` = 1 cm. An object half off an edge fails.
+4. **A tap above** (filling). Scene points above the opening (within 3 cm of its axis, 2 to
+   30 cm above the rim) that are not a ceiling or a shelf (the scene in that height range
+   covers at most half of the 15 cm disk around the opening).
+5. **Through the loop** (hanging). The hook's (the strap's) inner disk must be crossed by the
+   scene: the rail, peg, door top or panel edge passes through the loop, so the object hangs
+   from it. A hanger standing on a flat top or beside an edge fails.
+6. **Feet within reach** (sitting; a rider's feet may dangle, as on a vaulting horse). Under each foot the highest scene surface not above
+   the sole (or, with nothing under it, the ground: the lowest scene point within 1.5 m; feet
+   sunk into a floor are test 1's business) is at most
+   ``feet_reach`` = 25 cm below the sole: a bar stool passes, a table top or a counter does
+   not.
+7. **Astride** (riding). The scene's surface goes on between the legs ahead of the seat:
+   scene samples in a box 3 cm either side of the body's mid-plane, from 12 to 32 cm ahead of
+   the seat point, from 30 cm below to 2 cm above the seat (a motorbike's tank, a bench or a
+   sofa arm going on between the knees; not a bench crossed sideways). And there is room for
+   a leg on each side: no scene sample 18 to 35 cm either side of the mid-plane, from 10 cm
+   behind to 20 cm ahead of the seat point, from 14 cm below to 2 cm above the seat (a wide
+   seat or a bed fails; a sofa cushion lower than that beside the arm does not). Pretend riding
+   does not need the example's motorbike: the rider's legs are not tested for penetration
+   (they go where the support lets them, as a child's on a sofa arm), its arms as in test 1.
+
+A pose is valid when every test of its affordance passes. :class:`Verdict` keeps each measured
 value, so that a table can show why a pose failed.
 """
 
@@ -50,19 +69,43 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
+from ..errors import InputError
+from . import collision
+
+#: The tests of each affordance (module docstring).
+TESTS = {
+    "placing": ("penetration", "contact", "support"),
+    "filling": ("penetration", "contact", "support", "overhead"),
+    "hanging": ("penetration", "contact", "loop"),
+    "sitting": ("penetration", "contact", "support", "feet"),
+    "riding": ("penetration", "contact", "astride", "legroom"),
+}
+#: Affordances whose query is a container, tested as its convex hull.
+HULL = ("placing", "filling")
+#: Affordances whose query is a person (feet allowance, larger penetration tolerance).
+PERSON = ("sitting", "riding")
+
 
 @dataclass(frozen=True)
 class JudgeSettings:
     """Every threshold of the judge (metres), documented in the module docstring."""
 
     spacing: float = 0.01
-    voxel: float = 0.003
     penetration_depth: float = 0.01
+    person_penetration_depth: float = 0.02
+    limb_penetration: float = 0.10
+    limb_below_seat: float = 0.05
+    arm_above_seat: float = 0.08
+    arm_lateral: float = 0.16
+    forearm_above_seat: tuple = (0.20, 0.50)
+    forearm_ahead: float = 0.18
+    feet_height: float = 0.12
     contact_tolerance: float = 0.01
     contact_distance: float = 0.02
-    contact_part_fraction: float = 0.5
-    contact_part_link: float = 0.03
-    min_part_share: float = 0.05
+    contact_fraction: float = 0.5
+    person_contact_fraction: float = 0.02
+    seat_region_height: float = 0.03
+    main_contact_radius: float = 0.3
     support_below: float = 0.02
     support_above: float = 0.01
     support_margin: float = 0.01
@@ -70,38 +113,63 @@ class JudgeSettings:
     overhead_range: tuple = (0.02, 0.30)
     overhead_disk: float = 0.15
     overhead_max_cover: float = 0.5
+    loop_fraction: float = 0.85
+    feet_reach: float = 0.25
+    ground_radius: float = 1.5
+    astride_ahead: tuple = (0.12, 0.32)
+    astride_half_width: float = 0.03
+    astride_below: tuple = (0.30, 0.02)        # (below, above) the seat
+    legroom_lateral: tuple = (0.18, 0.35)
+    legroom_along: tuple = (-0.10, 0.20)
+    legroom_below: tuple = (0.14, 0.02)        # (below, above) the seat
     seed: int = 0
 
 
 @dataclass
 class Verdict:
-    """The judge's decision on one pose, with the measured values behind it."""
+    """The judge's decision on one pose, with the measured values behind it.
+
+    ``penetration`` is the separating move (m; 0 when not touching, inf when no tried move
+    frees it); ``contact`` the fraction of the main contact touching the scene again; the
+    optional fields are None where the test does not apply.
+    """
 
     valid: bool
     penetration: float
     contact: float
     support_margin: float | None = None
     overhead: bool | None = None
+    loop: bool | None = None
+    feet_gap: float | None = None
+    astride: bool | None = None
+    legroom: bool | None = None
     reasons: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
-        return {"valid": bool(self.valid), "penetration_m": round(float(self.penetration), 4),
-                "contact_worst_part": round(float(self.contact), 3),
-                "support_margin_m": None if self.support_margin is None
-                else round(float(self.support_margin), 4),
-                "overhead": self.overhead, "reasons": list(self.reasons)}
+        def r(v, nd=4):
+            return None if v is None else (None if not np.isfinite(v) else round(float(v), nd))
+        return {"valid": bool(self.valid), "penetration_m": r(self.penetration),
+                "contact": r(self.contact, 3), "support_margin_m": r(self.support_margin),
+                "overhead": self.overhead, "loop": self.loop, "feet_gap_m": r(self.feet_gap),
+                "astride": self.astride, "legroom": self.legroom,
+                "reasons": list(self.reasons)}
 
 
 class JudgeScene:
-    """The scene as the judge sees it: dense seeded samples and a KD-tree."""
+    """The scene as the judge sees it: its triangles (for exact collision), dense seeded
+    surface samples and their KD-tree (for contact, support and what is above or below)."""
 
     def __init__(self, geometry, spacing: float = 0.01, seed: int = 0):
         from ..scene import prepare_scene
 
+        if not geometry.is_mesh:
+            raise InputError(getattr(geometry, "source", None),
+                             "the judge needs a mesh scene (triangles), not a point cloud")
         sc = prepare_scene(geometry, spacing, seed=seed + 9176)
         self.points = sc.points
         self.tree = cKDTree(self.points)
         self.spacing = spacing
+        self.collider = collision.MeshCollider(geometry.vertices, geometry.faces)
         self.source = getattr(geometry, "source", "<scene>")
 
 
@@ -112,76 +180,121 @@ class Judge:
     ----------
     query : Geometry, the query object as posed in the training example (training frame)
     scene_object : Geometry, the example's scene-object in the same frame
-    solid : ``hull`` or ``mesh`` (module docstring)
-    support, overhead : which optional tests apply (placing/sitting; filling)
+    affordance : one of :data:`TESTS`
+    support_point : (3,) the point of the scene-object the interaction rests on
+    loop : hanging only: (centre (3,), inner radius, axis (3,)) of the hook or strap loop
     """
 
-    def __init__(self, query, scene_object, solid: str = "mesh", support: bool = False,
-                 overhead: bool = False, settings: JudgeSettings | None = None):
+    def __init__(self, query, scene_object, affordance: str, support_point, loop=None,
+                 settings: JudgeSettings | None = None):
         from ..examples.interactions import surface_points
 
+        if affordance not in TESTS:
+            raise ValueError(f"unknown affordance {affordance!r}; known: {', '.join(TESTS)}")
+        if not query.is_mesh:
+            raise InputError(query.source, "the judge needs the query object as a mesh")
         self.settings = st = settings or JudgeSettings()
-        self.support = support
-        self.overhead = overhead
+        self.affordance = affordance
+        self.tests = TESTS[affordance]
         self.samples = surface_points(query, 20000, st.seed)
         self.com = self.samples.mean(axis=0)
-        s_pts = surface_points(scene_object, 300000, st.seed + 1)
-        d, _ = cKDTree(s_pts).query(self.samples, workers=-1)
-        contact = self.samples[d <= st.contact_tolerance]
-        if len(contact) == 0:
-            contact = self.samples[d <= d.min() + st.contact_tolerance]
-        self.contact_points, self.contact_labels = _parts(contact, st.contact_part_link,
-                                                          st.min_part_share)
         self.radius = float(np.linalg.norm(self.samples - self.com, axis=1).max())
-        self._build_solid(query, solid)
+        self.support_point = np.asarray(support_point, float)
+        self.main_contact = self._main_contact(scene_object)
+        self.bodies = self._bodies(query)
         top = self.samples[:, 2].max()
         rim = self.samples[self.samples[:, 2] >= top - 0.01]
         self.opening = np.r_[rim[:, :2].mean(axis=0), top]
+        z0 = self.samples[:, 2].min()
+        low = self.samples[self.samples[:, 2] <= z0 + st.feet_height]
+        mid = np.median(self.samples[:, 1])
+        self.feet = [low[low[:, 1] > mid], low[low[:, 1] <= mid]]
+        self.loop_body = None
+        if "loop" in self.tests:
+            if loop is None:
+                raise ValueError("a hanging judge needs the example's loop")
+            centre, inner, axis = loop
+            v, f = collision.disk(centre, st.loop_fraction * inner, axis)
+            self.loop_body = collision.Body(v, f)
+        s = self.support_point
+        # columns (training frame: x-y box, z range) the astride and legroom tests look in
+        self.astride_column = ((s[0] + st.astride_ahead[0], s[0] + st.astride_ahead[1]),
+                               (s[1] - st.astride_half_width, s[1] + st.astride_half_width),
+                               (s[2] - st.astride_below[0], s[2] + st.astride_below[1]))
+        self.legroom_columns = [((s[0] + st.legroom_along[0], s[0] + st.legroom_along[1]),
+                                 tuple(sorted(s[1] + side * np.asarray(st.legroom_lateral))),
+                                 (s[2] - st.legroom_below[0], s[2] + st.legroom_below[1]))
+                                for side in (1, -1)]
 
     @classmethod
     def for_example(cls, example, settings: JudgeSettings | None = None) -> "Judge":
         """The judge of an :class:`~interaction_tensor.examples.interactions.Example`."""
-        sp = example.spec
-        return cls(example.query, example.scene_object, sp.solid, sp.support, sp.overhead,
-                   settings)
+        return cls(example.query, example.scene_object, example.spec.affordance,
+                   example.support_point, example.loop, settings)
 
-    # ------------------------------------------------------------------ solid
-    def _build_solid(self, query, solid: str) -> None:
+    # ------------------------------------------------------------------ set-up
+    def _main_contact(self, scene_object) -> np.ndarray:
+        """(C, 3) query samples touching the scene-object near the support point; for a
+        person, the seat region: its surface within 3 cm above its lowest point within
+        ``main_contact_radius`` of the support point and not below the seat (buttocks, crotch and thighs: a seat of
+        another shape, round or narrow, touches another part of it than the example's)."""
+        from ..examples.interactions import surface_points
+
+        st = self.settings
+        if self.affordance in PERSON:
+            near = ((np.linalg.norm(self.samples - self.support_point, axis=1)
+                     <= st.main_contact_radius)
+                    & (self.samples[:, 2] >= self.support_point[2] - st.seat_region_height))
+            low = self.samples[near, 2].min()
+            return self.samples[near & (self.samples[:, 2] <= low + st.seat_region_height)]
+        s_pts = surface_points(scene_object, 300000, st.seed + 1)
+        d, _ = cKDTree(s_pts).query(self.samples, workers=-1)
+        touching = d <= st.contact_tolerance
+        if not touching.any():
+            touching = d <= d.min() + st.contact_tolerance
+        size = float(np.linalg.norm(np.ptp(self.samples, axis=0)))
+        radius = min(st.main_contact_radius, 0.5 * size)
+        near = ((np.linalg.norm(self.samples - self.support_point, axis=1) <= radius)
+                & (self.samples[:, 2] >= self.support_point[2] - 2 * st.contact_tolerance))
+        main = self.samples[touching & near]
+        if len(main) == 0:       # the support point is off the contact: the nearest contact
+            cand = self.samples[touching]
+            dist = np.linalg.norm(cand - self.support_point, axis=1)
+            main = cand[dist <= dist.min() + 0.05]
+        return main
+
+    def _bodies(self, query) -> list:
+        """[(Body, allowed depth, name)]: the query's triangles, split for a person into the
+        body and the feet."""
         import trimesh
-        from scipy.ndimage import distance_transform_edt
 
-        if solid == "hull" or not query.is_mesh:
-            mesh = trimesh.Trimesh(self.samples).convex_hull if not query.is_mesh else \
-                trimesh.Trimesh(query.vertices, query.faces, process=True).convex_hull
-        else:
-            mesh = trimesh.Trimesh(query.vertices, query.faces, process=False)
-        from scipy.ndimage import binary_closing, binary_fill_holes
-
-        ext = float(np.ptp(mesh.vertices, axis=0).max())
-        pitch = max(self.settings.voxel, ext / 200.0)
-        # surface voxels from dense samples (16 per voxel face on average), closed by one
-        # voxel (a 6-connected closing) so that no gap between samples lets the fill leak
-        area = float(mesh.area)
-        count = int(np.clip(16 * area / pitch ** 2, 50000, 4_000_000))
-        pts, _ = trimesh.sample.sample_surface(mesh, count, seed=self.settings.seed)
-        lo = pts.min(axis=0) - 4 * pitch
-        idx = np.floor((pts - lo) / pitch).astype(np.int64)
-        shape = idx.max(axis=0) + 5
-        occ = np.zeros(shape, bool)
-        occ[idx[:, 0], idx[:, 1], idx[:, 2]] = True
-        occ = binary_fill_holes(binary_closing(occ, iterations=1) | occ)
-        self.pitch = pitch
-        self.origin = lo + pitch / 2          # centre of voxel (0, 0, 0)
-        self.depth = (distance_transform_edt(occ) * pitch - pitch).astype(np.float32)
-        self.depth[~occ] = -1.0
-
-    def depth_at(self, points_training_frame: np.ndarray) -> np.ndarray:
-        """(N,) depth (m) of points inside the filled query object; -1 outside."""
-        idx = np.rint((points_training_frame - self.origin) / self.pitch).astype(np.int64)
-        ok = np.all((idx >= 0) & (idx < np.array(self.depth.shape)), axis=1)
-        out = np.full(len(idx), -1.0)
-        out[ok] = self.depth[idx[ok, 0], idx[ok, 1], idx[ok, 2]]
-        return out
+        st = self.settings
+        if self.affordance in HULL:
+            hull = trimesh.Trimesh(query.vertices, query.faces, process=True).convex_hull
+            return [(collision.Body(hull.vertices, hull.faces), st.penetration_depth, "object")]
+        v, f = query.vertices, query.faces
+        if self.affordance not in PERSON:
+            return [(collision.Body(v, f), st.penetration_depth, "object")]
+        # small triangles, so that a face's centroid says which part it belongs to
+        v, f = trimesh.remesh.subdivide_to_size(v, f, max_edge=0.02, max_iter=12)
+        sp = self.support_point
+        c = v[f].mean(axis=1)                       # face centroids
+        lower = c[:, 2] < sp[2] - st.limb_below_seat
+        if "legroom" in self.tests:                 # a rider's thighs, sloping to the knees
+            lower |= (c[:, 0] > sp[0] + 0.06) & (c[:, 2] < sp[2] + 0.08)
+        up = c[:, 2] - sp[2]
+        arm = (((up > st.arm_above_seat) & (np.abs(c[:, 1] - sp[1]) > st.arm_lateral))
+               | ((up > st.forearm_above_seat[0]) & (up < st.forearm_above_seat[1])
+                  & (c[:, 0] > sp[0] + st.forearm_ahead)))
+        left = c[:, 1] > sp[1]
+        out, rest = [], np.ones(len(f), bool)
+        for name, part in (("left leg", lower & left), ("right leg", lower & ~left),
+                           ("left arm", arm & left), ("right arm", arm & ~left)):
+            if part.any():
+                rest &= ~part
+                if not (name.endswith("leg") and "legroom" in self.tests):
+                    out.append((collision.Body(v, f[part]), st.limb_penetration, name))
+        return [(collision.Body(v, f[rest]), st.person_penetration_depth, "body")] + out
 
     # ------------------------------------------------------------------ judging
     def judge(self, scene: JudgeScene, pose) -> Verdict:
@@ -189,44 +302,69 @@ class Judge:
         st = self.settings
         pose = np.asarray(pose, float)
         rot, t = pose[:3, :3], pose[:3, 3]
-        com = rot @ self.com + t
+
+        def moved(p):
+            return p @ rot.T + t
+
+        com = moved(self.com)
         reasons = []
+        pen = 0.0
+        for body, allowed, name in self.bodies:
+            depth = scene.collider.separation(body, pose)
+            if name == "body" or name == "object":
+                pen = max(pen, depth)
+            if depth > allowed:
+                reasons.append(f"{name} penetrates the scene "
+                               + (f"{depth * 100:.0f} cm" if np.isfinite(depth) else "deeply"))
 
-        near = scene.tree.query_ball_point(com, self.radius + 2 * st.spacing)
-        near = np.asarray(near, np.int64)
-        local = scene.points[near]
-        depth = self.depth_at((local - t) @ rot) if len(local) else np.zeros(0)
-        pen = float(max(depth.max(), 0.0)) if len(depth) else 0.0
-        if pen > st.penetration_depth:
-            reasons.append(f"penetration {pen * 100:.1f} cm")
-
-        cp = self.contact_points @ rot.T + t
+        cp = moved(self.main_contact)
         d, _ = scene.tree.query(cp, workers=-1)
-        close = d <= st.contact_distance
-        worst = 1.0
-        for lab in np.unique(self.contact_labels):
-            worst = min(worst, float(close[self.contact_labels == lab].mean()))
-        if worst < st.contact_part_fraction:
-            reasons.append(f"contact part only {worst * 100:.0f} % touching")
+        contact = float((d <= st.contact_distance).mean())
+        need = st.person_contact_fraction if self.affordance in PERSON else st.contact_fraction
+        if contact < need:
+            reasons.append(f"main contact only {contact * 100:.0f} % touching")
 
-        margin = None
-        if self.support:
-            margin = self._support_margin(local, cp, self.samples @ rot.T + t, com)
-            if margin < st.support_margin:
+        verdict = Verdict(False, pen, contact)
+        near = np.asarray(scene.tree.query_ball_point(com, self.radius + 2 * st.spacing),
+                          np.int64)
+        local = scene.points[near]
+        if "support" in self.tests:
+            m = self._support_margin(local, moved(self.support_point)[2], moved(self.samples), com)
+            verdict.support_margin = m
+            if m < st.support_margin:
                 reasons.append("not supported under its centre of mass"
-                               if np.isfinite(margin) else "nothing under it")
-        over = None
-        if self.overhead:
-            over = self._overhead(scene, rot @ self.opening + t)
-            if not over:
+                               if np.isfinite(m) else "nothing under it")
+        if "overhead" in self.tests:
+            verdict.overhead = self._overhead(scene, moved(self.opening))
+            if not verdict.overhead:
                 reasons.append("no tap-like surface above the opening")
-        return Verdict(not reasons, pen, worst, margin, over, reasons)
+        if "loop" in self.tests:
+            verdict.loop = scene.collider.collides(self.loop_body, pose)
+            if not verdict.loop:
+                reasons.append("nothing passes through the hook")
+        if "feet" in self.tests:
+            gap = self._feet_gap(scene, [moved(f) for f in self.feet], com)
+            verdict.feet_gap = gap
+            if not gap <= st.feet_reach:
+                reasons.append("feet out of reach of the floor"
+                               if np.isfinite(gap) else "nothing under the feet")
+        local_t = (local - t) @ rot            # the scene near the pose, training frame
+        if "astride" in self.tests:
+            verdict.astride = bool(_in_column(local_t, self.astride_column).any())
+            if not verdict.astride:
+                reasons.append("nothing between the legs: not astride")
+        if "legroom" in self.tests:
+            verdict.legroom = not any(_in_column(local_t, c).any() for c in self.legroom_columns)
+            if not verdict.legroom:
+                reasons.append("no room for a leg on each side of the support")
+        verdict.reasons = reasons
+        verdict.valid = not reasons
+        return verdict
 
-    def _support_margin(self, local, contact, samples, com) -> float:
+    def _support_margin(self, local, z0, samples, com) -> float:
         from scipy.spatial import ConvexHull, QhullError
 
         st = self.settings
-        z0 = contact[:, 2].min()
         band = local[(local[:, 2] >= z0 - st.support_below) & (local[:, 2] <= z0 + st.support_above)]
         if len(band) < 3:
             return -np.inf
@@ -259,18 +397,29 @@ class Judge:
         cover = len(cells) * cell ** 2 / (np.pi * st.overhead_disk ** 2)
         return bool(cover <= st.overhead_max_cover)
 
+    def _feet_gap(self, scene: JudgeScene, feet: list, com) -> float:
+        """Largest distance (m) from a sole down to the highest scene surface under it (the
+        ground where nothing is under it); negative when the sole is below that surface."""
+        st = self.settings
+        ring = np.asarray(scene.tree.query_ball_point(com, st.ground_radius + self.radius),
+                          np.int64)
+        around = scene.points[ring]
+        ground = around[:, 2].min() if len(around) else -np.inf
+        worst = -np.inf
+        for foot in feet:
+            if len(foot) == 0:
+                continue
+            sole = foot[:, 2].min()
+            lo, hi = foot[:, :2].min(axis=0) - 0.02, foot[:, :2].max(axis=0) + 0.02
+            under = around[np.all((around[:, :2] >= lo) & (around[:, :2] <= hi), axis=1)
+                           & (around[:, 2] <= sole + st.contact_tolerance)]
+            top = under[:, 2].max() if len(under) else ground
+            worst = max(worst, sole - top)
+        return float(worst)
 
-def _parts(points: np.ndarray, link: float, min_share: float):
-    """Connected parts of ``points`` (links shorter than ``link``), small ones dropped."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
 
-    if len(points) > 4000:
-        points = points[np.random.default_rng(0).choice(len(points), 4000, replace=False)]
-    pairs = cKDTree(points).query_pairs(link, output_type="ndarray")
-    g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
-                   shape=(len(points), len(points)))
-    _, lab = connected_components(g, directed=False)
-    counts = np.bincount(lab)
-    keep = counts[lab] >= min_share * len(points)
-    return points[keep], lab[keep]
+def _in_column(points: np.ndarray, column) -> np.ndarray:
+    """(N,) bool: points inside the axis-aligned box ``((x0, x1), (y0, y1), (z0, z1))``."""
+    (x0, x1), (y0, y1), (z0, z1) = column
+    return ((points[:, 0] >= x0) & (points[:, 0] <= x1) & (points[:, 1] >= y0)
+            & (points[:, 1] <= y1) & (points[:, 2] >= z0) & (points[:, 2] <= z1))

@@ -89,11 +89,26 @@ EXAMPLES: dict[str, ExampleSpec] = {s.name: s for s in [
 
 @dataclass
 class Example:
-    """One interaction example, posed: the query object and the scene-object in one frame."""
+    """One interaction example, posed: the query object and the scene-object in one frame.
+
+    Attributes
+    ----------
+    spec : what the example is
+    query, scene_object : the two objects, posed, metres, +Z up
+    support_point : (3,) the point of the scene-object the interaction rests on: the table
+        top under the object, the basin bottom under the mug, the rail top under the hook,
+        the seat top under the person. The judge's main contact is the query's contact
+        nearest to it.
+    loop : for hanging, ``(centre (3,), inner radius, axis (3,))`` of the hook or strap loop
+        that the support passes through; None otherwise
+    real_query, real_scene_object : whether they were read from files
+    """
 
     spec: ExampleSpec
     query: Geometry
     scene_object: Geometry
+    support_point: np.ndarray
+    loop: tuple | None = None
     real_query: bool = False
     real_scene_object: bool = False
 
@@ -237,38 +252,96 @@ def build(name: str, objects_dir=None, seed: int = 0, real_scene_object: bool = 
     else:
         query = procedural[name]()
 
+    loop = None
     if sp.affordance == "filling":
         so = shapes.sink_with_tap()
         ox, oy, _ = shapes.TAP_OUTLET
         posed = pose_on(query, so, "bottom", (ox, oy), shapes.SINK_BOTTOM, seed)
+        support = (ox, oy, shapes.SINK_BOTTOM)
     elif sp.affordance == "placing":
         so = shapes.table_mesh()
         posed = pose_on(query, so, "bottom", (0.0, 0.0), 0.75, seed)
+        support = (0.0, 0.0, 0.75)
     elif sp.affordance == "hanging":
         so = shapes.coat_rail()
         q_pts = surface_points(query, 20000, seed)
         t = np.array([0.0, 0.0, shapes.RAIL_HEIGHT + 0.002])
         dz = drop_onto(q_pts + t, surface_points(so, 200000, seed + 1))
-        posed = _translated(query, t - [0, 0, dz if np.isfinite(dz) else 0.0])
+        t = t - [0, 0, dz if np.isfinite(dz) else 0.0]
+        posed = _translated(query, t)
+        support = (0.0, 0.0, shapes.RAIL_HEIGHT + shapes.RAIL_RADIUS)
+        inner = shapes.HOOK_INNER if name == "hanging-hanger" else shapes.LOOP_INNER
+        loop = (t.copy(), inner, np.array([0.0, 1.0, 0.0]))
     elif sp.affordance == "sitting":
-        if real_s:
-            so = _load(objects_dir, sp.real_scene_object)
-            v = so.vertices
-            centre = (v[:, :2].min(axis=0) + v[:, :2].max(axis=0)) / 2
-            top = float(np.percentile(v[np.linalg.norm(v[:, :2] - centre, axis=1) < 0.15, 2], 99))
-        else:
-            so, centre, top = shapes.stool(), np.zeros(2), 0.45
-        posed = pose_on(query, so, "seat", centre, top, seed)
+        posed, so, support = _sitter_and_stool(query, objects_dir if real_s else None, seed)
     elif sp.affordance == "riding":
-        posed, so = _rider_and_bike(query, seed)
+        posed, so, support = _rider_and_bike(query, seed)
     else:  # pragma: no cover - EXAMPLES is closed
         raise ValueError(name)
-    return Example(sp, posed, so, real_q, real_s)
+    return Example(sp, posed, so, np.asarray(support, float), loop, real_q, real_s)
+
+
+def seat_region(person: Geometry, seed: int = 7):
+    """Where a seated person's weight rests, measured on its mesh.
+
+    Returns ``(z, samples)``: the height (m) of the lowest down-facing surface of the thighs
+    and buttocks (area samples with normal z < -0.5 between 25 % and 60 % of the body's height:
+    not the feet, not the forearms) and those samples within 3 cm of it, (S, 3).
+    """
+    from ..sampling import estimate_normals, sample_mesh
+
+    if person.is_mesh:
+        p, n = sample_mesh(person, 80000, seed)
+        down = n[:, 2] < -0.5
+    else:
+        p = person.vertices
+        down = np.abs(estimate_normals(p)[:, 2]) > 0.5
+    z0, z1 = p[:, 2].min(), p[:, 2].max()
+    band = down & (p[:, 2] > z0 + 0.25 * (z1 - z0)) & (p[:, 2] < z0 + 0.6 * (z1 - z0))
+    if not band.any():
+        raise InputError(person.source, "no seat (down-facing thighs or buttocks) found on the "
+                                        "seated person")
+    zs = float(p[band, 2].min())
+    return zs, p[band & (p[:, 2] <= zs + 0.03)]
+
+
+def _sitter_and_stool(person: Geometry, objects_dir, seed: int):
+    """A seated person in its own frame (feet flat on z = 0) on a stool built under its seat;
+    returns the person, the stool and the stool's top centre.
+
+    The stool's top touches the lowest point of the person's thighs and buttocks over the
+    stool; it reaches from 2 cm behind the buttocks to 3 cm short of the calves, 40 cm wide,
+    its legs on z = 0, the plane the feet stand on. With ``objects_dir`` the paper's stool
+    point cloud (``stool.ply``) is moved under the seat instead (its top to the seat).
+    """
+    pts = surface_points(person, 60000, seed)
+    person = _translated(person, [0.0, 0.0, -float(pts[:, 2].min())])      # feet on z = 0
+    pts = pts - [0.0, 0.0, pts[:, 2].min()]
+    zs, seat = seat_region(person)
+    calves = pts[(pts[:, 2] < zs - 0.1) & (pts[:, 2] > 0.1)]
+    front = float(calves[:, 0].min()) - 0.03 if len(calves) else float(seat[:, 0].max())
+    back = float(seat[:, 0].min()) - 0.02
+    cy = float((seat[:, 1].min() + seat[:, 1].max()) / 2)
+    depth, width = front - back, 0.40
+    dense = surface_points(person, 200000, seed + 3)
+    over = ((np.abs(dense[:, 0] - (front + back) / 2) <= depth / 2)
+            & (np.abs(dense[:, 1] - cy) <= width / 2) & (dense[:, 2] > 0.1))
+    top = float(dense[over, 2].min())
+    if objects_dir is None:
+        stool = shapes.stool(top, centre_xy=((front + back) / 2, cy), size_xy=(depth, width))
+        stool.source = f"procedural stool (top at {top:.3f} m)"
+        return person, stool, ((front + back) / 2, cy, top)
+    stool = _load(objects_dir, "stool.ply")
+    v = stool.vertices
+    centre = (v[:, :2].min(axis=0) + v[:, :2].max(axis=0)) / 2
+    stool_top = float(np.percentile(v[np.linalg.norm(v[:, :2] - centre, axis=1) < 0.15, 2], 99))
+    shift = np.r_[np.array([(front + back) / 2, cy]) - centre, top - stool_top]
+    return person, _translated(stool, shift), ((front + back) / 2, cy, top)
 
 
 def _rider_and_bike(rider: Geometry, seed: int):
     """Build the motorbike around the rider (seat, grips, pegs measured on its mesh), then lift
-    both so that the wheels stand on z = 0."""
+    both so that the wheels stand on z = 0; returns the rider, the bike and the seat point."""
     pts = surface_points(rider, 30000, seed)
     seat = anchor_point(rider, "seat", pts, rear=True)
     top = pts[:, 2].max()
@@ -284,15 +357,24 @@ def _rider_and_bike(rider: Geometry, seed: int):
     grips = np.array(grips)
     feet = pts[pts[:, 2] < pts[:, 2].min() + 0.01]
     pegs = [tuple(feet[feet[:, 1] * s > 0][:, :2].mean(axis=0)) for s in (1, -1)]
+    # the seat: 16 cm wide, from 18 cm behind to 6 cm ahead of the pelvis, its top touching the
+    # lowest point of the rider over it (buttocks, crotch and the start of the thighs; not the
+    # legs below)
+    span, width = (-0.18, 0.06), 0.16
+    dense = surface_points(rider, 200000, seed + 3)
+    over = ((dense[:, 0] >= seat[0] + span[0]) & (dense[:, 0] <= seat[0] + span[1])
+            & (np.abs(dense[:, 1] - seat[1]) <= width / 2) & (dense[:, 2] > seat[2] - 0.1))
+    seat = np.r_[seat[:2], dense[over, 2].min()]
     bike = shapes.motorbike(seat_xy=seat[:2], seat_top=seat[2], grips=grips,
                             grip_top=float(grips[:, 2].min()), pegs_xy=pegs,
-                            peg_top=float(pts[:, 2].min()), ground=float(pts[:, 2].min()) - 0.3)
+                            peg_top=float(pts[:, 2].min()), ground=float(pts[:, 2].min()) - 0.3,
+                            seat_span=span, seat_width=width)
     dz = drop_onto(pts + [0, 0, 0.005], surface_points(bike, 200000, seed + 1))
     lift = np.array([0.0, 0.0, 0.3 - float(pts[:, 2].min())])
     rider = _translated(rider, lift + [0, 0, 0.005 - (dz if np.isfinite(dz) else 0.005)])
     bike = _translated(bike, lift)
     bike.source = "procedural motorbike"
-    return rider, bike
+    return rider, bike, seat + lift + [(span[0] + span[1]) / 2, 0.0, 0.0]
 
 
 def train_settings(name: str, spacing: float = 0.01, seed: int = 0, query_points: int = 6000):
@@ -305,9 +387,16 @@ def train_settings(name: str, spacing: float = 0.01, seed: int = 0, query_points
 
 def build_descriptor(name: str, objects_dir=None, seed: int = 0, spacing: float = 0.01,
                      example: Example | None = None):
-    """Fit the Interaction Tensor of example ``name`` (see :func:`build`)."""
+    """Fit the Interaction Tensor of example ``name`` (see :func:`build`).
+
+    The reference point p_scene is the example's support point (the seat's, the rail's or the
+    table's point under the query), where detection's test points will be; for filling, whose
+    test points are on the tap (N_aff down), it is found on the tap by
+    :meth:`InteractionTensor.fit`.
+    """
     from ..descriptor import InteractionTensor
 
     ex = example or build(name, objects_dir, seed)
+    ref = None if ex.spec.affordance == "filling" else ex.support_point
     return InteractionTensor.fit(ex.query, ex.scene_object, name,
-                                 train_settings(name, spacing, seed))
+                                 train_settings(name, spacing, seed), reference_point=ref)

@@ -95,13 +95,20 @@ def bottle(radius: float = 0.035, height: float = 0.24) -> Geometry:
     return _geometry([revolve(prof)], "procedural bottle")
 
 
-def coat_hanger(rail_radius: float = 0.0125, wire: float = 0.003) -> Geometry:
-    """A wooden coat hanger (42 cm wide) in the x-z plane whose hook wraps a rail along +y.
+#: Inner radius of the coat hanger's hook and of the handbag's strap loop (m).
+HOOK_INNER = 0.023
+LOOP_INNER = 0.025
 
-    The rail axis is the y axis at z = 0: the inside of the hook rests on the top of a rail
-    of radius ``rail_radius``; the shoulders hang below."""
-    rc = rail_radius + wire                       # hook centreline radius
-    ang = np.radians(np.linspace(0.0, 200.0, 12))
+
+def coat_hanger(hook_inner: float = HOOK_INNER, wire: float = 0.003) -> Geometry:
+    """A wooden coat hanger (42 cm wide) in the x-z plane with a wire hook along +y.
+
+    The hook is an arc of inner radius ``hook_inner`` (4.6 cm across, as on common wire
+    hooks, so that it fits rails, hooks, door tops and shelf edges up to 4 cm thick) about the
+    y axis at z = 0, from the +x side over the top to 20 degrees below the -x side; the stem
+    goes down on the +x side to the wooden neck and the shoulders hang 15 cm below."""
+    rc = hook_inner + wire                       # hook centreline radius
+    ang = np.radians(np.linspace(0.0, 200.0, 16))
     arc = np.c_[rc * np.cos(ang), np.zeros_like(ang), rc * np.sin(ang)]
     stem = np.array([[rc, 0.0, -0.06]])
     hook = polyline(np.vstack([stem, arc]), wire, sections=8)
@@ -112,13 +119,14 @@ def coat_hanger(rail_radius: float = 0.0125, wire: float = 0.003) -> Geometry:
     return _geometry([hook] + body, "procedural coat hanger")
 
 
-def handbag(rail_radius: float = 0.0125, strap: float = 0.005) -> Geometry:
-    """A handbag (30 x 12 x 22 cm body) hanging by its strap from a rail along +y at z = 0.
+def handbag(loop_inner: float = LOOP_INNER, strap: float = 0.005) -> Geometry:
+    """A handbag (30 x 12 x 22 cm body) hanging by its strap, in the x-z plane.
 
-    The strap goes over the top of the rail (its inside touches the rail top); the body hangs
-    20 cm below."""
-    rc = rail_radius + strap
-    ang = np.radians(np.linspace(0.0, 180.0, 10))
+    The strap's top is an arc of inner radius ``loop_inner`` about the y axis at z = 0 (it
+    goes over a rail, a hook, a chair back or a door top up to 5 cm thick); from its ends the
+    strap runs down to the body, which hangs 20 cm below."""
+    rc = loop_inner + strap
+    ang = np.radians(np.linspace(0.0, 180.0, 12))
     arc = np.c_[rc * np.cos(ang), np.zeros_like(ang), rc * np.sin(ang)]
     z_top = -0.20
     pts = np.vstack([[[0.09, 0.0, z_top], [rc, 0.0, -0.02]], arc,
@@ -217,25 +225,30 @@ def coat_rail(height: float = RAIL_HEIGHT, length: float = 0.9) -> Geometry:
     return _geometry(parts, "procedural coat rail")
 
 
-def stool(seat_height: float = 0.45, size: float = 0.4) -> Geometry:
-    """A stool: a square upholstered seat (``size`` m) with its top at ``seat_height`` on four
-    legs, centred at the origin."""
+def stool(seat_height: float = 0.45, size: float = 0.4, centre_xy=(0.0, 0.0),
+          size_xy=None) -> Geometry:
+    """A stool: an upholstered seat (``size`` m square, or ``size_xy`` (x, y) m) with its top
+    at ``seat_height`` on four legs standing on z = 0, centred at ``centre_xy``."""
     th = 0.06
-    parts = [box((0, 0, seat_height - th / 2), (size, size, th))]
+    cx, cy = centre_xy
+    sx_, sy_ = (size, size) if size_xy is None else size_xy
+    parts = [box((cx, cy, seat_height - th / 2), (sx_, sy_, th))]
     for sx, sy in ((-1, -1), (-1, 1), (1, -1), (1, 1)):
-        parts.append(box((sx * (size / 2 - 0.03), sy * (size / 2 - 0.03), (seat_height - th) / 2),
-                         (0.04, 0.04, seat_height - th)))
+        parts.append(box((cx + sx * (sx_ / 2 - 0.03), cy + sy * (sy_ / 2 - 0.03),
+                          (seat_height - th) / 2), (0.04, 0.04, seat_height - th)))
     return _geometry(parts, "procedural stool")
 
 
 def motorbike(seat_xy=(-0.15, 0.0), seat_top: float = 0.476, grips=RIDER_HANDS,
               grip_top: float | None = None, pegs_xy=((0.14, 0.15), (0.14, -0.15)),
-              peg_top: float = 0.0, ground: float = -0.3) -> Geometry:
+              peg_top: float = 0.0, ground: float = -0.3, seat_span=(-0.3, 0.0),
+              seat_width: float = 0.14) -> Geometry:
     """A motorbike-like frame built around a rider: seat, handlebars with grips, foot pegs,
     frame and two wheels touching ``ground``.
 
     Parameters (metres, in the rider's frame): ``seat_xy`` and ``seat_top`` where the
-    pelvis rests; ``grips`` the two hand positions, the grips lying with their top at
+    pelvis rests, the seat reaching ``seat_span`` (x, relative to ``seat_xy``) and
+    ``seat_width`` across; ``grips`` the two hand positions, the grips lying with their top at
     ``grip_top`` (default: 4.5 cm under the hand centres); ``pegs_xy`` and ``peg_top`` under
     the feet. The wheels (radius 0.3 m) touch z = ``ground``.
     """
@@ -243,7 +256,8 @@ def motorbike(seat_xy=(-0.15, 0.0), seat_top: float = 0.476, grips=RIDER_HANDS,
     g = np.asarray(grips, float)
     gt = grip_top if grip_top is not None else float(g[:, 2].min()) - 0.045
     rg = 0.016
-    parts = [box((sx - 0.15, sy, seat_top - 0.05), (0.3, 0.14, 0.1)),                 # seat
+    s0, s1 = seat_span
+    parts = [box((sx + (s0 + s1) / 2, sy, seat_top - 0.05), (s1 - s0, seat_width, 0.1)),  # seat
              box((sx + 0.2, sy, seat_top - 0.3), (0.8, 0.06, 0.3)),                   # frame
              rod((g[0, 0], g[0, 1] + 0.06, gt - rg), (g[1, 0], g[1, 1] - 0.06, gt - rg), rg,
                  caps=False),                                                          # bar

@@ -1,0 +1,326 @@
+"""A labelled set of valid and invalid poses that proves the judge, per affordance.
+
+Each :class:`LabelledPose` is a pose of one example's query object (4x4, training frame ->
+scene) in a named scene, with a label given by construction, not by the judge: a valid pose
+puts the object on a site that the scene's builder made for that interaction
+(:mod:`..examples.furniture`: a seat, a rail, a tap over a basin...) the way the example
+has it; an invalid one is a hard negative made from a site or from a surface that does not
+afford the interaction (sunk into the seat, hovering, through a table top or a wall, half off
+an edge, under a shelf with no tap, sitting on a wide seat instead of astride...). The poses
+in the published scenes were placed by hand at measured furniture (see :data:`HAND_POSED`).
+
+:func:`generate` makes the set (``scripts/make_labelled_set.py`` writes it to
+``evaluation/data/labelled_poses.json``), :func:`load` reads it, and :func:`judge_accuracy`
+judges every pose and counts agreement per affordance and class. Scenes are named
+``validation:<name>`` (:mod:`..examples.validation`) or ``shared:<path>`` (a file under the
+shared data directory, e.g. ``shared:scenes/office-desk1.ply``).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import re
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+
+DATA_FILE = Path(__file__).resolve().parent / "data" / "labelled_poses.json"
+FORMAT = "interaction-tensor-labelled-poses"
+FORMAT_VERSION = 1
+#: Hang sites on the top edge of a panel (no room below the hook for a rigid hanger).
+PANEL = re.compile(r"door|divider|panel|side")
+#: Seats at least 0.4 m wide (a round stool can be straddled; these cannot).
+WIDE_SEAT = re.compile(r"sofa|bed|armchair|dining chair|office chair|bench seat")
+#: The example judged for each affordance in the labelled set.
+EXAMPLE_OF = {"placing": "placing-bowl", "filling": "filling-mug",
+              "hanging": "hanging-hanger", "sitting": "sitting-human",
+              "riding": "riding-human"}
+
+
+@dataclass
+class LabelledPose:
+    """One labelled pose.
+
+    Attributes
+    ----------
+    affordance, example : e.g. ``sitting``, ``sitting-human``
+    scene : ``validation:<name>`` or ``shared:<relative path>``
+    pose : 4x4 nested list, the example's training-frame query object -> scene
+    valid : the label
+    case : what kind of case it is, e.g. ``seat`` or ``sunk 10 cm into the seat``
+    note : where (the site's note)
+    """
+
+    affordance: str
+    example: str
+    scene: str
+    pose: list
+    valid: bool
+    case: str
+    note: str
+
+
+# ------------------------------------------------------------------ poses
+def site_pose(example, point, angle: float, shift=(0.0, 0.0, 0.0)) -> np.ndarray:
+    """4x4: the example's support point to ``point`` (3,), the query turned by ``angle``
+    (radians, about +Z), then moved by ``shift`` (3,) in scene axes."""
+    c, s = math.cos(angle), math.sin(angle)
+    m = np.eye(4)
+    m[:2, :2] = [[c, -s], [s, c]]
+    m[:3, 3] = np.asarray(point, float) + np.asarray(shift, float) - m[:3, :3] @ example.support_point
+    return m
+
+
+def facing_angle(example, facing) -> float:
+    """Angle (radians) that turns the example onto a site whose ``facing`` is given: a person
+    faces +x in the training frame; a hook's support runs along +y."""
+    a = math.atan2(facing[1], facing[0])
+    return a - math.pi / 2 if example.spec.affordance == "hanging" else a
+
+
+def seated_reach(example) -> tuple[float, float]:
+    """How far (m) a seated person reaches along its facing from the support point: its back
+    behind it (above the seat) and its calves ahead of it (from 10 cm below the seat down to
+    10 cm above the floor). Training frame, facing +x."""
+    from ..examples.interactions import surface_points
+
+    q = surface_points(example.query, 20000)
+    s = example.support_point
+    back = float(s[0] - q[q[:, 2] > s[2] + 0.05, 0].min())
+    calves = q[(q[:, 2] < s[2] - 0.1) & (q[:, 2] > q[:, 2].min() + 0.1)]
+    return back, float(calves[:, 0].min() - s[0])
+
+
+def edge_distance(points_tree, points, start, direction, z, step=0.01, reach=1.5) -> float:
+    """Distance (m) from ``start`` along the horizontal ``direction`` to where the surface at
+    height ``z`` ends: the first point with no sample within 2.5 cm horizontally and 1 cm
+    vertically (wider than the gaps random 1 cm samples leave)."""
+    d = np.asarray(direction, float)
+    d = d / np.linalg.norm(d)
+    for t in np.arange(0.0, reach, step):
+        p = np.r_[np.asarray(start, float)[:2] + t * d[:2], z]
+        near = np.asarray(points_tree.query_ball_point(p, 0.03), np.int64)
+        q = points[near]
+        if not np.any((np.abs(q[:, 2] - z) <= 0.01)
+                      & (np.hypot(q[:, 0] - p[0], q[:, 1] - p[1]) <= 0.025)):
+            return float(t)
+    return float(reach)
+
+
+# ------------------------------------------------------------------ generation
+def _entry(ex, scene, pose, valid, case, note) -> LabelledPose:
+    return LabelledPose(ex.spec.affordance, ex.spec.name, scene,
+                        np.round(np.asarray(pose, float), 6).tolist(), bool(valid), case, note)
+
+
+def _validation_poses(ex, name, vs, jscene) -> list:
+    """Poses of example ``ex`` in validation scene ``vs`` (label by construction)."""
+    from scipy.spatial import cKDTree
+
+    aff = ex.spec.affordance
+    scene = f"validation:{name}"
+    out = []
+    by = {k: [s for s in vs.sites if s.kind == k] for k in ("seat", "astride", "hang", "place",
+                                                            "fill")}
+    tree = cKDTree(jscene.points)
+
+    def add(pose, valid, case, note):
+        out.append(_entry(ex, scene, pose, valid, case, note))
+
+    if aff == "sitting":
+        back, calves = seated_reach(ex)
+        for i, s in enumerate(by["seat"]):
+            a = facing_angle(ex, s.facing)
+            f = np.r_[s.facing, 0.0]
+            # where a person sits on this seat: the back clear of the backrest, the calves in
+            # front of the seat's front edge (a deep sofa: sitting forward)
+            front = edge_distance(tree, jscene.points, s.point, f, s.point[2])
+            fwd = max(0.0, back + 0.03 - s.width if math.isfinite(s.width) else 0.0,
+                      front + 0.01 - calves)
+            add(site_pose(ex, s.point, a, fwd * f), True, "seat", s.note)
+            if i % 2 == 0:
+                add(site_pose(ex, s.point, a, fwd * f + [0, 0, -0.10]), False,
+                    "sunk 10 cm into the seat", s.note)
+            else:
+                add(site_pose(ex, s.point, a, fwd * f + [0, 0, 0.10]), False,
+                    "hovering 10 cm above the seat", s.note)
+            if math.isfinite(s.width) and re.search("sofa|armchair", s.note):
+                # a solid upholstered back (a ladder-back chair could be straddled)
+                add(site_pose(ex, s.point, a + math.pi), False, "facing the backrest", s.note)
+        for s in by["place"][::3]:
+            if s.point[2] > 0.6:
+                add(site_pose(ex, s.point, 0.3), False, "on a table top, legs through it",
+                    s.note)
+    elif aff == "riding":
+        for i, s in enumerate(by["astride"]):
+            a = facing_angle(ex, s.facing)
+            add(site_pose(ex, s.point, a), True, "astride", s.note)
+            add(site_pose(ex, s.point, a + math.pi), True, "astride, facing the other way",
+                s.note)
+            add(site_pose(ex, s.point, a + math.pi / 2), False, "across the support, not astride",
+                s.note)
+            if i % 2 == 0:
+                add(site_pose(ex, s.point, a, (0, 0, 0.12)), False, "hovering 12 cm", s.note)
+        for s in by["seat"]:
+            if WIDE_SEAT.search(s.note):
+                add(site_pose(ex, s.point, facing_angle(ex, s.facing)), False,
+                    "on a wide seat, not astride", s.note)
+    elif aff == "hanging":
+        for i, s in enumerate(by["hang"]):
+            a = facing_angle(ex, s.facing)
+            if PANEL.search(s.note):
+                # a panel (door, divider, shelf side) under its top edge: the rigid hanger
+                # hangs across the edge, so its shoulders go through the panel
+                add(site_pose(ex, s.point, a), False, "hook over a panel top, body through the panel",
+                    s.note)
+                continue
+            add(site_pose(ex, s.point, a + (math.pi if i % 2 else 0.0)), True, "hook over the support",
+                s.note)
+            if i % 3 == 0:
+                add(site_pose(ex, s.point, a, (0, 0, 0.05)), False, "hovering 5 cm above the support",
+                    s.note)
+            elif i % 3 == 1:
+                add(site_pose(ex, s.point, a + math.pi / 2), False,
+                    "turned along the support: the hook wire lies on it", s.note)
+            else:
+                side = np.r_[-s.facing[1], s.facing[0], 0.0]
+                add(site_pose(ex, s.point, a, 0.08 * side), False, "8 cm beside the support",
+                    s.note)
+            if "peg" in s.note:
+                out_of_wall = np.r_[s.facing, 0.0]
+                add(site_pose(ex, s.point, a, -0.12 * out_of_wall), False,
+                    "pushed 12 cm back along the peg, through the wall", s.note)
+        for s in by["place"][::2]:
+            add(site_pose(ex, s.point, 0.7), False, "hook on a flat top, hanger through it",
+                s.note)
+    elif aff == "placing":
+        for i, s in enumerate(by["place"]):
+            a = 0.4 * i
+            add(site_pose(ex, s.point, a), True, "on a free top", s.note)
+            if i % 3 == 0:
+                d = np.array([math.cos(a), math.sin(a), 0.0])
+                t = edge_distance(tree, jscene.points, s.point, d, s.point[2])
+                add(site_pose(ex, s.point, a, (t + 0.005) * d), False, "half off the edge",
+                    s.note)
+            elif i % 3 == 1:
+                add(site_pose(ex, s.point, a, (0, 0, -0.03)), False, "sunk 3 cm into the top",
+                    s.note)
+            else:
+                add(site_pose(ex, s.point, a, (0, 0, 0.05)), False, "floating 5 cm", s.note)
+    elif aff == "filling":
+        for i, s in enumerate(by["fill"]):
+            for j, a in enumerate((0.0, 2.0, 4.0)):
+                off = 0.01 * np.array([math.cos(1.7 * (i + j)), math.sin(1.7 * (i + j)), 0.0])
+                add(site_pose(ex, s.point, a, off), True, "in the basin under the tap", s.note)
+            side = np.array([-s.facing[1], s.facing[0], 0.0])
+            add(site_pose(ex, s.point, 1.0, 0.12 * side), False,
+                "in the basin 12 cm beside the outlet", s.note)
+            add(site_pose(ex, s.point, 1.0, (0, 0, 0.04)), False, "floating 4 cm under the tap",
+                s.note)
+        for s in by["place"][::2]:
+            add(site_pose(ex, s.point, 0.5), False, "on a top with no tap above", s.note)
+    return out
+
+
+def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
+    """The labelled set: every validation scene (or ``scenes``) for each affordance's example,
+    plus the hand-posed cases in the published scenes when ``shared_dir`` is given."""
+    from ..examples import interactions, validation
+    from .judge import JudgeScene
+
+    names = list(scenes) if scenes else validation.scene_names()
+    examples = {a: interactions.build(n, objects_dir) for a, n in EXAMPLE_OF.items()}
+    out = []
+    for name in names:
+        vs = validation.build_scene(name)
+        jscene = JudgeScene(vs.geometry)
+        for aff, ex in examples.items():
+            got = _validation_poses(ex, name, vs, jscene)
+            out += got
+        log(f"{name}: {len(out)} poses so far")
+    if shared_dir is not None:
+        for aff, scene, point, angle, valid, case, note in HAND_POSED:
+            ex = examples[aff]
+            shift = (0.0, 0.0, 0.0)
+            out.append(_entry(ex, f"shared:{scene}", site_pose(ex, point, angle, shift), valid,
+                              case, note))
+    return out
+
+
+#: Hand-posed cases in the published scenes: (affordance, scene file under the shared data
+#: directory, support point (3,) measured on the furniture, angle (radians), valid, case,
+#: note).
+HAND_POSED: list = []
+
+
+# ------------------------------------------------------------------ files
+def save(poses: list, path=DATA_FILE, meta: dict | None = None) -> Path:
+    """Write the set as JSON (versioned)."""
+    from ..io import atomic_path
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    doc = {"format": FORMAT, "format_version": FORMAT_VERSION, "meta": meta or {},
+           "poses": [asdict(p) for p in poses]}
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(json.dumps(doc, indent=0))
+    return path
+
+
+def load(path=DATA_FILE) -> list:
+    """Read a set written by :func:`save`."""
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text())
+    except (OSError, ValueError) as exc:
+        raise InputError(path, f"cannot read the labelled poses ({exc})") from None
+    if doc.get("format") != FORMAT or doc.get("format_version") != FORMAT_VERSION:
+        raise InputError(path, "not a labelled-poses file of a version this code reads")
+    return [LabelledPose(**p) for p in doc["poses"]]
+
+
+# ------------------------------------------------------------------ judging the judge
+def judge_accuracy(poses: list, objects_dir=None, shared_dir=None, log=None):
+    """Judge every pose; returns (rows per affordance, per-pose verdicts).
+
+    A row: affordance, valid_n, valid_right, invalid_n, invalid_right, and the accuracies
+    (%) on each class. Poses in the shared scenes are skipped without ``shared_dir``.
+    """
+    from ..examples import interactions, validation
+    from ..io import load_geometry
+    from .judge import Judge, JudgeScene
+
+    judges, scenes, verdicts = {}, {}, []
+    for p in poses:
+        if p.scene.startswith("shared:"):
+            if shared_dir is None:
+                continue
+            key = p.scene
+            if key not in scenes:
+                scenes[key] = JudgeScene(load_geometry(Path(shared_dir) / p.scene[7:]))
+        else:
+            key = p.scene
+            if key not in scenes:
+                scenes[key] = JudgeScene(validation.build_scene(p.scene.split(":", 1)[1]).geometry)
+        if p.example not in judges:
+            judges[p.example] = Judge.for_example(interactions.build(p.example, objects_dir))
+        v = judges[p.example].judge(scenes[key], np.asarray(p.pose, float))
+        verdicts.append((p, v))
+    rows = []
+    for aff in ("placing", "sitting", "filling", "riding", "hanging"):
+        vs = [(p, v) for p, v in verdicts if p.affordance == aff]
+        if not vs:
+            continue
+        pos = [(p, v) for p, v in vs if p.valid]
+        neg = [(p, v) for p, v in vs if not p.valid]
+        vr = sum(v.valid for _, v in pos)
+        ir = sum(not v.valid for _, v in neg)
+        rows.append({"affordance": aff, "valid_n": len(pos), "valid_right": vr,
+                     "invalid_n": len(neg), "invalid_right": ir,
+                     "valid_accuracy": 100.0 * vr / len(pos) if pos else float("nan"),
+                     "invalid_accuracy": 100.0 * ir / len(neg) if neg else float("nan")})
+    return rows, verdicts
