@@ -37,7 +37,8 @@ def test_evaluate_smoke_on_two_scenes(tmp_path):
     assert code == 0
     with open(out / "table1.csv") as fh:
         rows = list(csv.DictReader(fh))
-    assert list(rows[0]) == ["affordance", "method", "accuracy", "f_score"]
+    assert list(rows[0]) == ["affordance", "method", "precision", "accuracy", "f_score",
+                             "with_accepted", "runs"]
     assert {r["method"] for r in rows} == set(METHODS)
     assert [r["affordance"] for r in rows] == ["placing", "average"] * 4
     acc = {r["method"]: float(r["accuracy"]) for r in rows if r["affordance"] == "average"}
@@ -47,7 +48,7 @@ def test_evaluate_smoke_on_two_scenes(tmp_path):
     assert acc["iT-weighted"] > acc["Naive"]
     assert f1["iT-weighted"] > f1["Naive"]
     for name in ("table1.md", "sampling.csv", "sampling.md", "sampling.png", "timings.md",
-                 "judgements.csv", "run.json"):
+                 "judgements.csv", "run.json", "judge_accuracy.csv", "runs.csv"):
         assert (out / name).stat().st_size > 0
     assert len(list((out / "pictures").glob("*.png"))) == 2
     with open(out / "judgements.csv") as fh:

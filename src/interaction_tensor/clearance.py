@@ -69,16 +69,12 @@ def violations(points: np.ndarray, orient: np.ndarray, offsets: np.ndarray,
     return out
 
 
-def nearest_distance_function(scene, grid=None):
-    """A ``nearest_distance`` for :func:`violations`: the Numba grid when given, else the
-    scene's cKDTree."""
-    if grid is not None:
-        from .kernels import nearest_indices
-
-        def dist(q):
-            return np.linalg.norm(scene.points[nearest_indices(grid, q)] - q, axis=1)
-        return dist
-
+def nearest_distance_function(scene, grid=None, bound: float | None = None):
+    """A ``nearest_distance`` for :func:`violations`: the distance (m) to the nearest scene
+    sample, or ``inf`` beyond ``bound`` (the test only asks whether a sample is nearer than
+    the largest clearance, so a bounded search is exact for it and fast in open space). The
+    scene's cKDTree; ``grid`` is accepted for symmetry with the scoring backends."""
     def dist(q):
-        return scene.tree.query(q, workers=-1)[0]
+        return scene.tree.query(q, distance_upper_bound=np.inf if bound is None else bound,
+                                workers=-1)[0]
     return dist

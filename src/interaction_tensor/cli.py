@@ -74,6 +74,10 @@ def cmd_train(args) -> int:
     t0 = time.perf_counter()
     tensor = InteractionTensor.fit(query, scene_object, args.affordance, settings,
                                    reference_point=args.reference_point)
+    if args.acceptance:
+        from .examples.interactions import acceptance
+
+        tensor.set_acceptance(*acceptance(args.acceptance))
     out = tensor.save(args.output)
     _say(args, f"trained {tensor.affordance!r} in {time.perf_counter() - t0:.2f} s: "
                f"{len(tensor.bisector_points)} bisector points, "
@@ -264,6 +268,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="provenance vectors to the sampled surface (default) or to the samples")
     p.add_argument("--reference-point", type=_vector, default=None,
                    help="override the reference point p_scene as x,y,z (metres)")
+    p.add_argument("--acceptance", choices=("placing", "filling", "hanging", "sitting", "riding"),
+                   default=None,
+                   help="accept as the paper's affordance does (S_aff and clearance limit tuned "
+                        "on validation scenes) instead of 0.9 x the example's own score")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("-q", "--quiet", action="store_true")
     _geometry_options(p)

@@ -133,14 +133,16 @@ def register(sub) -> None:
     p.add_argument("--objects", default=None, help="directory of real query objects")
     p.add_argument("--methods", default=None,
                    help="comma-separated subset of iT-weighted,iT-uniform,Naive,BS")
-    p.add_argument("--test-points", type=_positive_int, default=2000,
-                   help="test points drawn per scene (sample fraction = this / scene points)")
-    p.add_argument("--sample-fraction", type=_fraction, default=None,
-                   help="fixed fraction of scene points as test points (overrides --test-points)")
-    p.add_argument("--max-candidates", type=_positive_int, default=16,
-                   help="candidates scored by the Naive baseline per (example, scene)")
-    p.add_argument("--max-bs-candidates", type=_positive_int, default=6,
-                   help="candidates scored by the BS baseline per (example, scene)")
+    p.add_argument("--sample-fraction", type=_fraction, default=0.30,
+                   help="fraction of scene points drawn as test points (default: the paper's "
+                        "0.30)")
+    p.add_argument("--test-points", type=_positive_int, default=None,
+                   help="a fixed number of test points per scene instead of the fraction")
+    p.add_argument("--max-candidates", type=_positive_int, default=64,
+                   help="candidates scored by the Naive baseline per (example, scene) "
+                        "(default 64)")
+    p.add_argument("--max-bs-candidates", type=_positive_int, default=12,
+                   help="candidates scored by the BS baseline per (example, scene) (default 12)")
     p.add_argument("--spacing", type=float, default=0.01, help="sampling spacing (m)")
     p.add_argument("--no-pictures", action="store_true")
     p.add_argument("--seed", type=int, default=0)

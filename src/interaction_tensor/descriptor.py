@@ -71,6 +71,7 @@ class InteractionTensor:
     contact_points : (C, 3) query samples that touch the scene-object in the example
     clearance_points : (K, 3) query surface samples, training frame (iTClearance)
     clearance_radius : (K,) free space (m) around each in the example, at most clearance_max
+    clearance_limit : fraction of the clearance points a placement may violate
     scene_points : (S, 3) scene-object samples used for the Voronoi step (subsampled)
     scene_spacing : spacing (m) of the scene-object samples; detection samples at it
     vectors : ``surface`` or ``points``, how provenance (and test) vectors are measured
@@ -97,6 +98,7 @@ class InteractionTensor:
     vectors: str = "surface"
     clearance_points: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     clearance_radius: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    clearance_limit: float = 0.05
     thresholds: dict = field(default_factory=dict)
     self_scores: dict = field(default_factory=dict)
     meta: dict = field(default_factory=dict)
@@ -111,6 +113,20 @@ class InteractionTensor:
     def threshold(self, criterion: str = "paper", which: str = "weighted") -> float:
         """Default acceptance threshold for a criterion and keypoint set."""
         return float(self.thresholds[f"{criterion}-{which}"])
+
+    def set_acceptance(self, threshold: float, clearance_limit: float | None = None) -> None:
+        """Accept placements scoring at least ``threshold`` (both keypoint sets, paper
+        criterion) and violating at most ``clearance_limit`` of the clearance points, e.g.
+        an affordance's S_aff tuned on validation scenes
+        (:func:`interaction_tensor.examples.interactions.acceptance`)."""
+        if not 0 < threshold <= 1:
+            raise ValueError("threshold must be in (0, 1]")
+        for which in ("weighted", "uniform"):
+            self.thresholds[f"paper-{which}"] = float(threshold)
+        if clearance_limit is not None:
+            if not 0 <= clearance_limit <= 1:
+                raise ValueError("clearance_limit must be in [0, 1]")
+            self.clearance_limit = float(clearance_limit)
 
     def pose(self, position, angle: float) -> np.ndarray:
         """4x4 pose taking the training-frame query object to ``position`` at ``angle``."""
@@ -235,7 +251,8 @@ class InteractionTensor:
             uniform=sets["uniform"], query_vertices=np.asarray(qv, float),
             query_faces=np.asarray(qf, np.int64), contact_points=contact,
             scene_points=keep_scene, scene_spacing=float(settings.scene_spacing),
-            vectors=settings.vectors, clearance_points=c_pts, clearance_radius=c_rad)
+            vectors=settings.vectors, clearance_points=c_pts, clearance_radius=c_rad,
+            clearance_limit=float(settings.clearance_limit))
 
         # 7. calibration: the example scored against a re-sampled copy of itself ----------
         say("calibration")
@@ -281,6 +298,7 @@ class InteractionTensor:
         header = {
             "format": FORMAT, "format_version": FORMAT_VERSION, "affordance": self.affordance,
             "radius": self.radius, "scene_spacing": self.scene_spacing, "vectors": self.vectors,
+            "clearance_limit": self.clearance_limit,
             "thresholds": self.thresholds, "self_scores": self.self_scores, "meta": self.meta,
         }
         arrays = {
@@ -340,6 +358,7 @@ class InteractionTensor:
                 scene_spacing=float(header["scene_spacing"]), vectors=header["vectors"],
                 clearance_points=arrays.get("clearance_points", np.zeros((0, 3))),
                 clearance_radius=arrays.get("clearance_radius", np.zeros(0)),
+                clearance_limit=float(header.get("clearance_limit", 0.05)),
                 thresholds=header["thresholds"],
                 self_scores=header["self_scores"], meta=header.get("meta", {}))
         except KeyError as exc:
@@ -367,6 +386,7 @@ class InteractionTensor:
                              "faces": int(len(self.query_faces))},
             "contact_points": int(len(self.contact_points)),
             "clearance_points": int(len(self.clearance_points)),
+            "clearance_limit": self.clearance_limit,
             "thresholds": self.thresholds, "self_scores": self.self_scores,
             "meta": self.meta,
         }

@@ -229,6 +229,14 @@ def _score_all(scene, jobs, backend, index, settings, progress, label):
     return [PairScores(t, a, d, c) for t, a, d, c in zip(totals, acc, at, cmp_)]
 
 
+def clearance_limit(tensor: InteractionTensor, settings: DetectSettings) -> float:
+    """Fraction of clearance points a placement may violate: the settings' own, else the
+    descriptor's."""
+    if settings.clearance_max_violations is not None:
+        return float(settings.clearance_max_violations)
+    return float(tensor.clearance_limit)
+
+
 def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_orient,
                     pairs: PairScores, grid=None):
     """Apply the clearance test to the pairs the score accepted (in place on
@@ -245,8 +253,10 @@ def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_or
     tol = settings.clearance_tolerance
     viol[idx] = violations(scene.points[pair_point[idx]], pair_orient[idx],
                            clearance_offsets(tensor, settings.n_orientations),
-                           tensor.clearance_radius, tol, nearest_distance_function(scene, grid))
-    pairs.accepted[idx[viol[idx] > settings.clearance_max_violations * k]] = False
+                           tensor.clearance_radius, tol,
+                           nearest_distance_function(scene, grid,
+                                                     float(tensor.clearance_radius.max())))
+    pairs.accepted[idx[viol[idx] > clearance_limit(tensor, settings) * k]] = False
     return score_acc, viol
 
 
@@ -389,8 +399,9 @@ def full_scores(det: Detection, idx: np.ndarray):
                                     det.pair_orientation[idx[todo]],
                                     clearance_offsets(det.tensor, st.n_orientations),
                                     det.tensor.clearance_radius, tol,
-                                    nearest_distance_function(det.scene, grid))
-        ok = viol <= st.clearance_max_violations * k
+                                    nearest_distance_function(
+                                        det.scene, grid, float(det.tensor.clearance_radius.max())))
+        ok = viol <= clearance_limit(det.tensor, st) * k
     return scores, ok
 
 

@@ -62,6 +62,9 @@ class TrainSettings:
     #: Largest clearance (m) recorded per clearance point: the free space around the query
     #: that a new scene must leave, up to this (ours).
     clearance_max: float = 0.02
+    #: Fraction of the clearance points a placement may violate before detection rejects it
+    #: (stored in the descriptor; ours).
+    clearance_limit: float = 0.05
     #: Seed of every random step of training.
     seed: int = 0
 
@@ -69,6 +72,7 @@ class TrainSettings:
         _check(self.query_points >= 100, "query_points must be at least 100")
         _check(self.clearance_points >= 0, "clearance_points must be non-negative")
         _check(self.clearance_max > 0, "clearance_max must be positive (metres)")
+        _check(0 <= self.clearance_limit <= 1, "clearance_limit must be in [0, 1]")
         _check(self.scene_spacing > 0, "scene_spacing must be positive (metres)")
         _check(self.crop_factor >= 1.0, "crop_factor must be at least 1")
         _check(self.n_keypoints >= 8, "n_keypoints must be at least 8")
@@ -128,12 +132,14 @@ class DetectSettings:
     #: Clearance test (when the descriptor has clearance points): an accepted pair must also
     #: leave the query room, i.e. no scene sample nearer than ``r - tolerance`` to a clearance
     #: point whose free space in the example was r (at most ``clearance_max``), at more than
-    #: ``clearance_max_violations`` (a fraction) of the clearance points. A sample is never
-    #: nearer than the surface it lies on, so sampling cannot cause a violation; the
-    #: tolerance only allows the scene a little closer than the example (ours).
+    #: ``clearance_max_violations`` (a fraction) of the clearance points; None: the
+    #: descriptor's own limit (tuned per affordance for the paper's examples, else
+    #: ``TrainSettings.clearance_limit``). A sample is never nearer than the surface it lies
+    #: on, so sampling cannot cause a violation; the tolerance only allows the scene a little
+    #: closer than the example (ours).
     clearance: bool = True
     clearance_tolerance: float = 0.005
-    clearance_max_violations: float = 0.02
+    clearance_max_violations: float | None = None
     #: Predictions kept after non-maximum suppression.
     top_k: int = 10
     #: Suppression radius (m) of the top-k; None: the query object's width (the larger side
@@ -167,7 +173,7 @@ class DetectSettings:
         _check(self.top_k >= 0, "top_k must be non-negative")
         _check(self.clearance_tolerance >= 0,
                "clearance_tolerance must be non-negative (metres)")
-        _check(0 <= self.clearance_max_violations <= 1,
+        _check(self.clearance_max_violations is None or 0 <= self.clearance_max_violations <= 1,
                "clearance_max_violations must be in [0, 1]")
         _check(self.nms_radius is None or self.nms_radius >= 0, "nms_radius must be >= 0")
         _check(self.scene_spacing is None or self.scene_spacing > 0,

@@ -40,12 +40,23 @@ def capped_candidates(candidates: np.ndarray, cap: int | None, seed: int = 0) ->
     return np.sort(rng.choice(candidates, cap, replace=False))
 
 
-def local_points(scene, centre, radius: float, cap: int, seed: int = 0) -> np.ndarray:
-    """Scene points within ``radius`` of ``centre``, at most ``cap`` (seeded subset)."""
+def local_points(scene, centre, radius: float, voxel: float | None = None) -> np.ndarray:
+    """Scene points within ``radius`` of ``centre``, thinned to one per ``voxel`` (m) cell
+    when given (the same thinning the baseline's calibration sees)."""
     idx = np.asarray(scene.tree.query_ball_point(centre, radius), np.int64)
-    if len(idx) > cap:
-        idx = np.random.default_rng(seed).choice(idx, cap, replace=False)
-    return scene.points[idx]
+    pts = scene.points[np.sort(idx)]
+    return voxel_down(pts, voxel) if voxel else pts
+
+
+def voxel_down(points: np.ndarray, voxel: float) -> np.ndarray:
+    """One point per cubic cell of edge ``voxel`` (the first in input order): a thinning that
+    gives the same density wherever it is applied, unlike a cap on the count."""
+    points = np.asarray(points, float)
+    if len(points) == 0:
+        return points
+    keys = np.floor(points / voxel).astype(np.int64)
+    _, first = np.unique(keys, axis=0, return_index=True)
+    return points[np.sort(first)]
 
 
 def candidate_poses(scene, tensor, candidates: np.ndarray, n_orientations: int):

@@ -6,7 +6,9 @@ every orientation, the query object is put where the iT would put it (the same p
 (Open3D, or :mod:`.icp`'s NumPy version). The score is the ICP fitness (fraction of query
 samples with a scene point within ``max_distance`` = one scene spacing); a pair is accepted
 when it is at least the fitness the example itself gets against its own scene-object. The
-proposed pose is the ICP-refined one. There is no representation of the interaction: this is
+scene is used at the density it was sampled at, as the example's scene-object is for that
+fitness (no cap on the points: a cap would make large neighbourhoods sparser than the
+calibration and fail them). The proposed pose is the ICP-refined one. There is no representation of the interaction: this is
 what the paper calls matching the object instead of the interaction.
 """
 
@@ -39,7 +41,7 @@ def example_fitness(tensor, samples, max_distance: float, backend: str = "auto")
 
 
 def naive(scene, tensor, candidates: np.ndarray, n_orientations: int = 8,
-          max_distance: float | None = None, local_cap: int = 4000, iterations: int = 15,
+          max_distance: float | None = None, iterations: int = 15,
           backend: str = "auto", seed: int = 0) -> BaselineResult:
     """Score every (candidate, orientation) with the Naive baseline.
 
@@ -56,7 +58,7 @@ def naive(scene, tensor, candidates: np.ndarray, n_orientations: int = 8,
     point, orient, poses = candidate_poses(scene, tensor, candidates, n_orientations)
     score = np.zeros(len(point))
     for c, ci in enumerate(candidates):
-        tgt = local_points(scene, scene.points[ci], tensor.radius, local_cap, seed + c)
+        tgt = local_points(scene, scene.points[ci], tensor.radius)
         tree = cKDTree(tgt) if len(tgt) else None
         for k in range(c * n_orientations, (c + 1) * n_orientations):
             poses[k], score[k], _ = icp(src, tgt, poses[k], md, iterations, backend, tree)

@@ -67,21 +67,35 @@ class MeshCollider:
         return fcl.collide(body.object, self.object, fcl.CollisionRequest(),
                            fcl.CollisionResult()) > 0
 
+    def frees(self, body: "Body", pose: np.ndarray, length: float) -> bool:
+        """Whether a move of ``length`` (m) in one of the 26 :func:`directions` takes
+        ``body`` (at ``pose``) clear of the mesh."""
+        moved = np.asarray(pose, float).copy()
+        for d in directions():
+            moved[:3, 3] = pose[:3, 3] + length * d
+            if not self.collides(body, moved):
+                return True
+        return False
+
     def separation(self, body: "Body", pose: np.ndarray, lengths=(0.002, 0.005, 0.01, 0.02,
-                                                                   0.05, 0.1, 0.2)) -> float:
+                                                                   0.05, 0.1, 0.2),
+                   limit: float | None = None) -> float:
         """Smallest of ``lengths`` (m) by which ``body`` can be moved in one of the 26
         :func:`directions` so that it no longer intersects the mesh: 0 when it does not
         intersect at its pose, ``inf`` when no tried move frees it. An upper bound of the
-        penetration depth (the true minimal move may be shorter, in another direction)."""
+        penetration depth (the true minimal move may be shorter, in another direction).
+        With ``limit``, only whether it is at most ``limit`` matters: a body that ``limit``
+        does not free is ``inf`` at once (26 tests instead of up to 182)."""
         pose = np.asarray(pose, float)
         if not self.collides(body, pose):
             return 0.0
-        moved = pose.copy()
+        if limit is not None:
+            if not self.frees(body, pose, limit):
+                return float("inf")
+            lengths = [x for x in lengths if x < limit] + [limit]
         for length in lengths:
-            for d in directions():
-                moved[:3, 3] = pose[:3, 3] + length * d
-                if not self.collides(body, moved):
-                    return float(length)
+            if self.frees(body, pose, length):
+                return float(length)
         return float("inf")
 
 

@@ -129,8 +129,8 @@ class JudgeSettings:
 class Verdict:
     """The judge's decision on one pose, with the measured values behind it.
 
-    ``penetration`` is the separating move (m; 0 when not touching, inf when no tried move
-    frees it); ``contact`` the fraction of the main contact touching the scene again; the
+    ``penetration`` is the separating move (m; 0 when not touching, inf when a move of the
+    allowed depth does not free it); ``contact`` the fraction of the main contact touching the scene again; the
     optional fields are None where the test does not apply.
     """
 
@@ -171,6 +171,24 @@ class JudgeScene:
         self.spacing = spacing
         self.collider = collision.MeshCollider(geometry.vertices, geometry.faces)
         self.source = getattr(geometry, "source", "<scene>")
+        # lowest sample per 10 cm column, for the ground level around a pose
+        self._cell = 0.1
+        ij = np.floor(self.points[:, :2] / self._cell).astype(np.int64)
+        self._origin = ij.min(axis=0)
+        ij -= self._origin
+        shape = ij.max(axis=0) + 1
+        low = np.full(int(shape[0] * shape[1]), np.inf)
+        np.minimum.at(low, ij[:, 0] * shape[1] + ij[:, 1], self.points[:, 2])
+        self._low = low.reshape(shape)
+
+    def ground_level(self, centre, radius: float) -> float:
+        """The lowest scene point within ``radius`` (m, horizontally, to 10 cm) of ``centre``."""
+        c = np.floor(np.asarray(centre, float)[:2] / self._cell).astype(np.int64) - self._origin
+        r = int(np.ceil(radius / self._cell))
+        lo, hi = np.maximum(c - r, 0), np.minimum(c + r + 1, self._low.shape)
+        if np.any(hi <= lo):
+            return -np.inf
+        return float(self._low[lo[0]:hi[0], lo[1]:hi[1]].min())
 
 
 class Judge:
@@ -201,6 +219,10 @@ class Judge:
         self.radius = float(np.linalg.norm(self.samples - self.com, axis=1).max())
         self.support_point = np.asarray(support_point, float)
         self.main_contact = self._main_contact(scene_object)
+        if len(self.main_contact) > 2000:
+            keep = np.random.default_rng(st.seed).choice(len(self.main_contact), 2000,
+                                                         replace=False)
+            self.main_contact = self.main_contact[np.sort(keep)]
         self.bodies = self._bodies(query)
         top = self.samples[:, 2].max()
         rim = self.samples[self.samples[:, 2] >= top - 0.01]
@@ -310,7 +332,7 @@ class Judge:
         reasons = []
         pen = 0.0
         for body, allowed, name in self.bodies:
-            depth = scene.collider.separation(body, pose)
+            depth = scene.collider.separation(body, pose, limit=allowed)
             if name == "body" or name == "object":
                 pen = max(pen, depth)
             if depth > allowed:
@@ -318,7 +340,7 @@ class Judge:
                                + (f"{depth * 100:.0f} cm" if np.isfinite(depth) else "deeply"))
 
         cp = moved(self.main_contact)
-        d, _ = scene.tree.query(cp, workers=-1)
+        d, _ = scene.tree.query(cp, distance_upper_bound=st.contact_distance * 1.01)
         contact = float((d <= st.contact_distance).mean())
         need = st.person_contact_fraction if self.affordance in PERSON else st.contact_fraction
         if contact < need:
@@ -401,16 +423,17 @@ class Judge:
         """Largest distance (m) from a sole down to the highest scene surface under it (the
         ground where nothing is under it); negative when the sole is below that surface."""
         st = self.settings
-        ring = np.asarray(scene.tree.query_ball_point(com, st.ground_radius + self.radius),
-                          np.int64)
-        around = scene.points[ring]
-        ground = around[:, 2].min() if len(around) else -np.inf
+        ground = scene.ground_level(com, st.ground_radius + self.radius)
         worst = -np.inf
         for foot in feet:
             if len(foot) == 0:
                 continue
             sole = foot[:, 2].min()
             lo, hi = foot[:, :2].min(axis=0) - 0.02, foot[:, :2].max(axis=0) + 0.02
+            centre = np.r_[(lo + hi) / 2, sole]
+            idx = np.asarray(scene.tree.query_ball_point(
+                centre - [0, 0, 0.5], float(np.hypot(*(hi - lo)) / 2 + 0.5)), np.int64)
+            around = scene.points[idx]
             under = around[np.all((around[:, :2] >= lo) & (around[:, :2] <= hi), axis=1)
                            & (around[:, 2] <= sole + st.contact_tolerance)]
             top = under[:, 2].max() if len(under) else ground

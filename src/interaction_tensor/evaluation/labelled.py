@@ -252,9 +252,31 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
 
 
 #: Hand-posed cases in the published scenes: (affordance, scene file under the shared data
-#: directory, support point (3,) measured on the furniture, angle (radians), valid, case,
-#: note).
-HAND_POSED: list = []
+#: directory, support point (3,) on the furniture's top (found by casting rays down on a 5 cm
+#: grid), angle (radians), valid, case, note). Each was drawn (close-ups from four sides) and
+#: labelled by eye before the judge saw it.
+HAND_POSED: list = [
+    ("sitting", "scenes/living-room2.ply", (3.65, 3.53, 0.401), 3 * math.pi / 2, True,
+     "seat", "living-room2 upholstered bench, facing out"),
+    ("sitting", "scenes/living-room2.ply", (3.65, 3.53, 0.401), math.pi / 2, False,
+     "legs along the seat, through it", "living-room2 upholstered bench"),
+    ("sitting", "scenes/living-room2.ply", (5.82, 1.93, 0.415), 0.0, True,
+     "seat", "living-room2 round stool"),
+    ("sitting", "scenes/living-room2.ply", (5.82, 1.93, 0.415), math.pi / 2, True,
+     "seat", "living-room2 round stool"),
+    ("sitting", "scenes/living-room2.ply", (5.82, 1.93, 0.415), 3 * math.pi / 2, False,
+     "head in the wall cabinet", "living-room2 round stool"),
+    ("sitting", "scenes/living-room2.ply", (2.39, 0.55, 0.47), math.pi / 2, False,
+     "on a TV sideboard, legs through its front", "living-room2 TV sideboard"),
+    ("riding", "scenes/kitchen5.ply", (2.64, 0.57, 0.524), 0.0, False,
+     "on a kitchen unit, legs through it", "kitchen5 low unit"),
+    ("riding", "scenes/kitchen5.ply", (2.64, 0.57, 0.524), math.pi / 2, False,
+     "on a kitchen unit, body in the counter", "kitchen5 low unit"),
+    ("riding", "scenes/living-room2.ply", (1.60, 0.54, 0.586), 0.0, False,
+     "on a cabinet top, not astride", "living-room2 side cabinet"),
+    ("riding", "scenes/living-room2.ply", (1.60, 0.54, 0.586), math.pi, False,
+     "on a cabinet top, not astride", "living-room2 side cabinet"),
+]
 
 
 # ------------------------------------------------------------------ files

@@ -23,19 +23,36 @@ def _fmt(v) -> str:
 
 
 def table_markdown(rows: list[dict], methods=METHODS) -> str:
-    """Table 1 as Markdown: one line per affordance, accuracy / F-score / precision per method."""
+    """Table 1 as Markdown: one line per affordance; per method the precision of the top 5
+    (the paper's comparable number), accuracy and F-score over top and bottom 5, and the
+    (scene, example) runs that accepted any prediction."""
     affs = [a for a in list(AFFORDANCES) + ["average"] if any(r["affordance"] == a for r in rows)]
     methods = [m for m in methods if any(r["method"] == m for r in rows)]
-    head = "| affordance | " + " | ".join(f"{m} acc | {m} F | {m} prec" for m in methods) + " |"
-    lines = [head, "|---|" + "---:|" * (3 * len(methods))]
+    head = ("| affordance | " + " | ".join(f"{m} prec / acc / F | {m} runs accepting"
+                                          for m in methods) + " |")
+    lines = [head, "|---|" + "---:|" * (2 * len(methods))]
     for a in affs:
         cells = []
         for m in methods:
             r = next((r for r in rows if r["affordance"] == a and r["method"] == m), None)
-            cells += [_fmt(r["accuracy"]), _fmt(r["f_score"]), _fmt(r["precision"])] if r else \
-                ["", "", ""]
+            if r is None:
+                cells += ["", ""]
+                continue
+            cells += [f"{_fmt(r['precision'])} / {_fmt(r['accuracy'])} / {_fmt(r['f_score'])}",
+                      f"{r.get('with_accepted', 0)}/{r.get('runs', 0)}"]
         name = f"**{a}**" if a == "average" else a
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def judge_markdown(rows: list[dict]) -> str:
+    """The judge's accuracy on the labelled set, per affordance and class."""
+    lines = ["| affordance | valid poses judged valid | invalid poses judged invalid |",
+             "|---|---:|---:|"]
+    for r in rows:
+        lines.append(f"| {r['affordance']} | {r['valid_right']}/{r['valid_n']} "
+                     f"({_fmt(r['valid_accuracy'])} %) | {r['invalid_right']}/{r['invalid_n']} "
+                     f"({_fmt(r['invalid_accuracy'])} %) |")
     return "\n".join(lines)
 
 
@@ -73,9 +90,18 @@ def sampling_rows(sampling: list[dict]) -> list[dict]:
 def write_all(res, out: Path) -> None:
     out = Path(out)
     rows = res.table
-    write_csv(out / "table1.csv", rows, ["affordance", "method", "accuracy", "f_score"])
+    write_csv(out / "table1.csv", rows,
+              ["affordance", "method", "precision", "accuracy", "f_score", "with_accepted",
+               "runs"])
     write_csv(out / "table1_detailed.csv", rows,
-              ["affordance", "method", "accuracy", "f_score", "precision", "tp", "fp", "tn", "fn"])
+              ["affordance", "method", "precision", "accuracy", "f_score", "tp", "fp", "tn", "fn",
+               "with_accepted", "runs"])
+    write_csv(out / "judge_accuracy.csv", res.judge_accuracy,
+              ["affordance", "valid_n", "valid_right", "valid_accuracy", "invalid_n",
+               "invalid_right", "invalid_accuracy"])
+    write_csv(out / "runs.csv", res.runs,
+              ["scene", "example", "affordance", "method", "candidates", "pairs", "accepted",
+               "any_accepted"])
     judg = [{k: v for k, v in j.items() if not k.startswith("_")} for j in res.judgements]
     write_csv(out / "judgements.csv", judg,
               ["scene", "example", "affordance", "method", "group", "rank", "score", "accepted",
@@ -133,8 +159,10 @@ def write_all(res, out: Path) -> None:
 
     md = ["# Table 1 (reproduced): validity of the top and bottom predictions, judged "
           "automatically\n",
-          "Accuracy, F-score and precision in %, per affordance (definitions in "
-          "`interaction_tensor/evaluation/runner.py`).\n", table_markdown(rows), "",
+          "Precision of the top 5, accuracy and F-score over the top and bottom 5, in %, per "
+          "affordance, and the (scene, example) runs that accepted any prediction "
+          "(definitions in `interaction_tensor/evaluation/runner.py`).\n", table_markdown(rows),
+          "", "## The judge on the labelled set\n", judge_markdown(res.judge_accuracy), "",
           "## The paper's Table 1 (human markers)\n", paper_markdown(), ""]
     (out / "table1.md").write_text("\n".join(md) + "\n")
     write_json(out / "run.json", {"settings": res.settings, "machine": machine()})
@@ -152,42 +180,6 @@ def sampling_plot(samp: list[dict], path: Path) -> None:
     ax.set_title("Comparisons needed to reach the acceptance threshold (mean)")
     ax.axhline(512, color="grey", lw=0.8, ls=":")
     ax.legend(frameon=False)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-
-
-def picture(path: Path, scene, detection, tensor, top_rows: list[dict], title: str) -> None:
-    """Top-down view: scene points (grey, darker = higher), the heat map (accepted points
-    coloured by score), and the judged top predictions (posed query object outline; green
-    valid, red invalid, numbered by rank)."""
-    plt = _mpl()
-    pts = scene.points
-    rng = np.random.default_rng(0)
-    show = rng.choice(len(pts), min(len(pts), 60000), replace=False)
-    order = show[np.argsort(pts[show, 2])]
-    fig, ax = plt.subplots(figsize=(6.4, 6.4), dpi=100)
-    ax.scatter(pts[order, 0], pts[order, 1], c=pts[order, 2], cmap="Greys", s=0.3, vmin=-0.5,
-               linewidths=0)
-    hot = np.flatnonzero(detection.heat > 0)
-    if len(hot):
-        sc = ax.scatter(pts[hot, 0], pts[hot, 1], c=detection.heat[hot], cmap="inferno", s=2,
-                        linewidths=0)
-        fig.colorbar(sc, ax=ax, fraction=0.035, pad=0.01, label="iT score (accepted)")
-    q = tensor.query_vertices
-    if len(q) > 3000:
-        q = q[rng.choice(len(q), 3000, replace=False)]
-    for r in top_rows:
-        pose = r["_pose"]
-        qp = q @ pose[:3, :3].T + pose[:3, 3]
-        col = "tab:green" if r["valid"] else "tab:red"
-        ax.scatter(qp[:, 0], qp[:, 1], s=0.5, c=col, linewidths=0)
-        ax.annotate(str(r["rank"]), (r["x"], r["y"]), color=col, fontsize=9, weight="bold")
-    ax.set_aspect("equal")
-    ax.set_title(title + "  (top 5 of iT-weighted: green valid, red invalid)", fontsize=8)
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("y (m)")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path)

@@ -377,6 +377,21 @@ def _rider_and_bike(rider: Geometry, seed: int):
     return rider, bike, seat + lift + [(span[0] + span[1]) / 2, 0.0, 0.0]
 
 
+#: Acceptance per affordance: (S_aff, clearance limit), chosen by
+#: :func:`interaction_tensor.evaluation.tuning.tune` on the procedural validation scenes
+#: (never the published ones): the pair of largest F1 of the decisions against the judge.
+#: The run, its curves and every judged pair: docs/results/tuning/.
+ACCEPTANCE: dict = {}
+
+
+def acceptance(affordance: str) -> tuple[float, float]:
+    """(S_aff, clearance limit) of one of the paper's five affordances (:data:`ACCEPTANCE`)."""
+    if affordance not in ACCEPTANCE:
+        raise InputError(None, f"no tuned acceptance for {affordance!r}; known: "
+                               f"{', '.join(ACCEPTANCE)}")
+    return ACCEPTANCE[affordance]
+
+
 def train_settings(name: str, spacing: float = 0.01, seed: int = 0, query_points: int = 6000):
     """TrainSettings of an example: its N_aff, the spacing and the seed."""
     from ..settings import TrainSettings
@@ -386,17 +401,21 @@ def train_settings(name: str, spacing: float = 0.01, seed: int = 0, query_points
 
 
 def build_descriptor(name: str, objects_dir=None, seed: int = 0, spacing: float = 0.01,
-                     example: Example | None = None):
+                     example: Example | None = None, tuned: bool = True):
     """Fit the Interaction Tensor of example ``name`` (see :func:`build`).
 
     The reference point p_scene is the example's support point (the seat's, the rail's or the
     table's point under the query), where detection's test points will be; for filling, whose
     test points are on the tap (N_aff down), it is found on the tap by
-    :meth:`InteractionTensor.fit`.
+    :meth:`InteractionTensor.fit`. With ``tuned``, the affordance's S_aff and clearance limit
+    (:data:`ACCEPTANCE`) replace the calibrated threshold.
     """
     from ..descriptor import InteractionTensor
 
     ex = example or build(name, objects_dir, seed)
     ref = None if ex.spec.affordance == "filling" else ex.support_point
-    return InteractionTensor.fit(ex.query, ex.scene_object, name,
-                                 train_settings(name, spacing, seed), reference_point=ref)
+    tensor = InteractionTensor.fit(ex.query, ex.scene_object, name,
+                                   train_settings(name, spacing, seed), reference_point=ref)
+    if tuned and ex.spec.affordance in ACCEPTANCE:
+        tensor.set_acceptance(*ACCEPTANCE[ex.spec.affordance])
+    return tensor

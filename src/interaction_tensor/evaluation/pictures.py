@@ -1,0 +1,93 @@
+"""Close-up pictures of judged poses: what a person checks a number against.
+
+One panel per pose: the scene cut to a box around the posed query object (so that walls and
+furniture in front do not hide it), seen from the side that shows most of the object, the
+object drawn green when the judge found it valid and red when not, with its rank, score and
+the judge's first reason. Drawn with the project's software renderer (:mod:`..viz.raster`):
+no display or OpenGL needed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+VALID = (40, 170, 70)
+INVALID = (215, 50, 40)
+SCENE = (150, 150, 160)
+PANEL = (360, 300)
+
+
+def _samples(geometry, spacing: float, seed: int = 0, limit: int = 2_500_000):
+    """Area samples of a mesh about ``spacing`` apart (at most ``limit``) and their normals."""
+    from ..sampling import estimate_normals, mesh_area, sample_mesh
+
+    if not geometry.is_mesh:
+        pts = np.asarray(geometry.vertices, float)
+        return pts, (geometry.normals if geometry.normals is not None else estimate_normals(pts))
+    n = int(np.clip(mesh_area(geometry) / spacing ** 2, 500, limit))
+    return sample_mesh(geometry, n, seed)
+
+
+def closeup(scene_points, scene_normals, query_points, query_normals, pose, colour,
+            margin: float = 0.25, size=PANEL, azimuths=(210, 300, 30, 120),
+            elevation: float = 22.0, spacing: float = 0.01) -> np.ndarray:
+    """(H, W, 3) uint8: the posed query object and the scene within ``margin`` (m) of it."""
+    from ..viz.raster import Canvas, frame_points
+
+    rot, t = pose[:3, :3], pose[:3, 3]
+    q = query_points @ rot.T + t
+    qn = query_normals @ rot.T
+    lo, hi = q.min(axis=0) - margin, q.max(axis=0) + margin
+    keep = np.all((scene_points >= lo) & (scene_points <= hi), axis=1)
+    sp, sn = scene_points[keep], scene_normals[keep]
+    frame = np.vstack([q, [lo, hi]])
+    best, best_cam = -1, None
+    for az in azimuths:               # the view that sees most of the object
+        cam = frame_points(frame, az, elevation, 120, 100)
+        cv = Canvas(cam, supersample=1)
+        cv.points(sp, (0, 0, 0), size=spacing, lit=False)
+        seen = int(cv.visible(q[:: max(1, len(q) // 400)], 0.02).sum())
+        if seen > best:
+            best, best_cam = seen, az
+    cam = frame_points(frame, best_cam, elevation, *size)
+    cv = Canvas(cam, supersample=2)
+    cv.points(sp, SCENE, sn, size=spacing * 1.6)
+    qs = float(np.sqrt(np.ptp(q, axis=0).prod() ** (2 / 3) / max(len(q), 1)) * 1.6)
+    cv.points(q, colour, qn, size=max(qs, 0.004))
+    return cv.image()
+
+
+def sheet(path, scene_geometry, query_geometry, poses, valid, captions, title: str,
+          scene_spacing: float = 0.01) -> Path:
+    """One PNG with a close-up per pose (up to 5 per row) under a title."""
+    from PIL import Image, ImageDraw
+
+    from ..io import atomic_path
+    from ..viz.render import _font
+
+    sp, sn = _samples(scene_geometry, scene_spacing)
+    qp, qn = _samples(query_geometry, 0.004)
+    panels = [closeup(sp, sn, qp, qn, np.asarray(p, float), VALID if v else INVALID,
+                      spacing=scene_spacing) for p, v in zip(poses, valid)]
+    if not panels:
+        panels = [np.full((PANEL[1], PANEL[0], 3), 255, np.uint8)]
+        captions = ["no prediction"]
+    cols = min(5, len(panels))
+    rows = (len(panels) + cols - 1) // cols
+    w, h = PANEL
+    img = Image.new("RGB", (cols * w, 30 + rows * (h + 34)), (255, 255, 255))
+    draw = ImageDraw.Draw(img)
+    draw.text((8, 7), title, fill=(20, 20, 20), font=_font(16))
+    for i, (panel, cap) in enumerate(zip(panels, captions)):
+        x, y = (i % cols) * w, 30 + (i // cols) * (h + 34)
+        img.paste(Image.fromarray(panel), (x, y))
+        draw.rectangle([x, y, x + w - 1, y + h - 1], outline=(210, 210, 210))
+        for k, line in enumerate(str(cap).split("\n")[:2]):
+            draw.text((x + 6, y + h + 2 + 15 * k), line[:52], fill=(20, 20, 20), font=_font(12))
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with atomic_path(path) as tmp:
+        img.save(tmp, format="PNG", optimize=True)
+    return path

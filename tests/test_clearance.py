@@ -1,0 +1,105 @@
+"""The clearance test, exact best/worst ranking of pairs, and the tuning's choice of S_aff."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import interaction_tensor as it
+from interaction_tensor.clearance import clearance_offsets, nearest_distance_function, violations
+from interaction_tensor.detect import full_scores, keypoint_table, rank_pairs
+from interaction_tensor.evaluation.tuning import choose, curve
+from interaction_tensor.examples.procedural import box_part, parts_mesh, table
+from interaction_tensor.predictions import top_k
+from interaction_tensor.scoring import score_pairs_exact
+
+from conftest import corner_example
+
+
+@pytest.fixture(scope="module")
+def bowl():
+    from interaction_tensor.examples import demo
+
+    q, s = demo.training_example()
+    return it.InteractionTensor.fit(q, s, "placing-bowl", it.TrainSettings(scene_spacing=0.02))
+
+
+def test_clearance_points_keep_the_examples_free_space(bowl):
+    r = bowl.clearance_radius
+    assert len(bowl.clearance_points) == 256 and r.shape == (256,)
+    assert 0.0 <= r.min() < 0.005                     # the foot ring touches the table
+    assert r.max() == pytest.approx(0.02)            # capped at clearance_max
+    assert bowl.clearance_limit == pytest.approx(0.05)
+
+
+def test_a_board_through_the_bowl_violates_its_clearance(bowl, tmp_path):
+    """The same table top: free above (no violation), and with a board 3 cm above the
+    table, i.e. through the bowl (most of the bowl's upper clearance points violated)."""
+    free = it.prepare_scene(parts_mesh(table("t", (0, 0), (1.0, 0.8), 0.7)), 0.01)
+    board = it.prepare_scene(parts_mesh(table("t", (0, 0), (1.0, 0.8), 0.7)
+                                        + [box_part("b", (0, 0, 0.74), (1.0, 0.8, 0.01))]), 0.01)
+    off = clearance_offsets(bowl, 8)
+    p = np.array([[0.0, 0.0, 0.7]])
+    counts = []
+    for sc in (free, board):
+        # the test point: the table-top sample nearest the centre
+        i = sc.tree.query(p)[1]
+        v = violations(sc.points[i], np.array([0]), off, bowl.clearance_radius, 0.005,
+                       nearest_distance_function(sc, bound=0.02))
+        counts.append(int(v[0]))
+    assert counts[0] <= 2 and counts[1] > 0.2 * 256, counts
+    # saved and loaded, the clearance is the same
+    bowl.save(tmp_path / "b.npz")
+    t2 = it.InteractionTensor.load(tmp_path / "b.npz")
+    assert np.array_equal(t2.clearance_points, bowl.clearance_points)
+    assert t2.clearance_limit == bowl.clearance_limit
+
+
+def test_detection_rejects_accepted_pairs_that_violate_clearance():
+    q, s = corner_example()
+    t = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1))
+    scene = it.prepare_scene(s, 0.01, seed=2)
+    loose = it.detect(scene, t, it.DetectSettings(sample_fraction=0.5, clearance=False))
+    strict = it.detect(scene, t, it.DetectSettings(sample_fraction=0.5))
+    assert np.array_equal(loose.pairs.accepted, strict.score_accepted)
+    assert strict.pairs.accepted.sum() <= loose.pairs.accepted.sum()
+    assert (strict.clearance_violations[~strict.score_accepted] == -1).all()
+    st = strict.stats
+    assert st["pairs_accepted_by_score"] - st["pairs_failing_clearance"] == st["pairs_accepted"]
+
+
+def test_rank_pairs_is_the_exact_best_and_worst_by_full_score(bowl):
+    from interaction_tensor.examples import demo
+
+    room = it.prepare_scene(demo.build().scene, 0.02, seed=0)
+    det = it.detect(room, bowl, it.DetectSettings(sample_fraction=0.01, threshold=0.9))
+    n = len(det.pairs.score)
+    table_ = keypoint_table(bowl, det.settings)
+    exact = np.concatenate([score_pairs_exact(room.points[det.pair_point[s:s + 1000]],
+                                              det.pair_orientation[s:s + 1000], table_, room,
+                                              2.0, bowl.vectors).score
+                            for s in range(0, n, 1000)])
+    full, ok = full_scores(det, np.arange(n))
+    assert np.allclose(full, exact, atol=1e-12)
+    pos = room.points[det.pair_point]
+    best, best_s, _ = rank_pairs(det, 5, 0.15, block=64)
+    assert best.tolist() == top_k(pos, np.where(ok, 2.0, 0.0) + full, 5, 0.15)
+    assert np.allclose(best_s, full[best])
+    worst, _, _ = rank_pairs(det, 5, 0.15, worst=True, block=64)
+    assert worst.tolist() == top_k(pos, -full, 5, 0.15)
+
+
+def test_tuning_chooses_the_threshold_of_best_f1():
+    def row(score, valid, weight=1.0, viol=0):
+        return {"affordance": "placing", "scene": "s", "example": "placing-bowl",
+                "score": score, "valid": valid, "weight": weight, "violations": viol,
+                "clearance_points": 100}
+    rows = ([row(0.9, True)] * 8 + [row(0.7, True)] * 2 + [row(0.6, False)] * 6
+            + [row(0.95, False, viol=50)] * 4 + [row(0.2, False, weight=10)] * 3)
+    c = {r["threshold"]: r for r in curve(rows, limit=0.05)}
+    assert c[0.65]["precision"] == pytest.approx(1.0) and c[0.65]["recall"] == pytest.approx(1.0)
+    assert c[0.5]["precision"] == pytest.approx(10 / 16)
+    runs = [{"affordance": "placing", "scene": "s", "example": "placing-bowl", "sites": 3}]
+    _, chosen = choose(rows, runs)
+    assert 0.6 < chosen["placing"]["threshold"] <= 0.7
+    assert chosen["placing"]["clearance_limit"] < 0.5
