@@ -103,3 +103,26 @@ def test_tuning_chooses_the_threshold_of_best_f1():
     _, chosen = choose(rows, runs)
     assert 0.6 < chosen["placing"]["threshold"] <= 0.7
     assert chosen["placing"]["clearance_limit"] < 0.5
+
+
+def test_train_with_a_tuned_acceptance_and_detect_without_clearance(tmp_path):
+    from interaction_tensor.cli import main
+    from interaction_tensor.examples.interactions import ACCEPTANCE
+
+    q, s = corner_example()
+    from interaction_tensor.io import write_mesh
+
+    write_mesh(tmp_path / "q.ply", q.vertices, q.faces)
+    write_mesh(tmp_path / "s.ply", s.vertices, s.faces)
+    out = tmp_path / "t.npz"
+    assert main(["train", str(tmp_path / "q.ply"), str(tmp_path / "s.ply"), "--affordance",
+                 "box", "-o", str(out), "--acceptance", "placing", "-q"]) == 0
+    t = it.InteractionTensor.load(out)
+    assert t.threshold() == ACCEPTANCE["placing"][0]
+    assert t.clearance_limit == ACCEPTANCE["placing"][1]
+    assert main(["detect", str(tmp_path / "s.ply"), str(out), "-o", str(tmp_path / "d"),
+                 "--no-clearance", "--sample-fraction", "0.2", "-q"]) == 0
+    import json
+
+    stats = json.loads((tmp_path / "d" / "predictions.json").read_text())["stats"]
+    assert stats["pairs_failing_clearance"] == 0

@@ -1,4 +1,22 @@
-"""Numba-compiled kernels (imported only when Numba is available; see kernels.py)."""
+"""Numba-compiled kernels (imported only when Numba is available; see kernels.py).
+
+Two exact nearest-neighbour searches feed the same per-keypoint arithmetic (:func:`_term`):
+
+* :func:`nearest`: shell search on the uniform grid of :class:`kernels.Grid` (any query, no
+  set-up; about 0.2 us near the surface, several us far from it);
+* the neighbour cache (:func:`_leaf`, :func:`_scan_list`; used by :func:`score_cached`):
+  octrees over root blocks of the queried space whose leaves hold every scene sample that
+  can be the nearest one to some point of the leaf's box (the samples whose Voronoi cell
+  meets the box, plus possibly a few more). A query descends to its leaf and scans one short
+  list (10 to 30 samples). Root blocks are built whole when queries reach them
+  (:func:`touched_roots`, :func:`collect_requests`, :func:`build_roots`, :func:`integrate`);
+  until its block is built a query uses :func:`nearest`, so every answer is exact.
+
+Ties: both searches return, among samples at the same computed squared distance, the one
+scanned first; the shell search scans its seed cell first and then by cell, the lists are in
+sorted-point order, so the two agree except for exact distance ties between samples of
+different grid cells (none in the shared scenes; see benchmarks/kernel_speed.py).
+"""
 
 import math
 
@@ -104,10 +122,69 @@ def nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz):
     return besti
 
 
+# --------------------------------------------------------------------- per-keypoint term
+@njit(cache=True, inline="always")
+def _term(qx, qy, qz, p, k, o, pts, nrm, prov, pnorm, weights, cos_lim, big_w, criterion, c,
+          a, wsum, nk, surface, rho):
+    """Normalised contribution of keypoint ``k`` (orientation ``o``, position q) whose nearest
+    scene sample is ``p``: the test vector (to ``p``, or to its disk of radius ``rho`` when
+    ``surface``) against the provenance vector, ``criterion`` 0 = paper, 1 = gaussian.
+    The only copy of the scoring arithmetic: change it here."""
+    vx = pts[p, 0] - qx
+    vy = pts[p, 1] - qy
+    vz = pts[p, 2] - qz
+    if surface:
+        ax = nrm[p, 0]
+        ay = nrm[p, 1]
+        az = nrm[p, 2]
+        al = vx * ax + vy * ay + vz * az
+        lx = vx - al * ax
+        ly = vy - al * ay
+        lz = vz - al * az
+        lat = math.sqrt(lx * lx + ly * ly + lz * lz)
+        sh = (lat - rho) / lat if lat > rho else 0.0
+        vx = al * ax + lx * sh
+        vy = al * ay + ly * sh
+        vz = al * az + lz * sh
+    px = prov[o, k, 0]
+    py = prov[o, k, 1]
+    pz = prov[o, k, 2]
+    vn = math.sqrt(vx * vx + vy * vy + vz * vz)
+    if criterion == 0:
+        den = pnorm[k] * vn
+        cosang = (px * vx + py * vy + pz * vz) / den if den > 0 else 0.0
+        term = 0.0
+        if cosang >= cos_lim[k]:       # angle <= limit, without acos
+            term = 1.0
+            if abs(pnorm[k] - vn) <= big_w[k] * pnorm[k] / c:
+                term = 2.0
+        return term / (2.0 * nk)
+    dx = vx - px
+    dy = vy - py
+    dz = vz - pz
+    d = math.sqrt(dx * dx + dy * dy + dz * dz) / max(pnorm[k], 1e-12)
+    sg = a * (1.0 + weights[k])
+    return weights[k] * math.exp(-d * d / (2.0 * sg * sg)) / wsum
+
+
+@njit(cache=True, inline="always")
+def _decision(s, k, rest, threshold, eps):
+    """After keypoint ``k`` with running score ``s``: 1 when the threshold is reached
+    (accepted), -1 when even the largest rest cannot reach it (rejected), 0 undecided."""
+    if s >= threshold - eps:
+        return 1
+    if s + rest[k + 1] < threshold - eps:
+        return -1
+    return 0
+
+
 @njit(cache=True, parallel=True, fastmath=False)
 def score(tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, max_terms, rest,
           criterion, c, a, wsum, threshold, early_exit, surface, rho,
           pts, nrm, starts, seed, origin, cell, dims, out_score, out_acc, out_at, out_cmp):
+    """Score pairs with the grid shell search for every keypoint (no set-up; the reference
+    of :func:`score_cached`). Pair i: test point ``tp[i]`` (m), orientation ``orient[i]``;
+    outputs per pair: score, accepted, decided_at, comparisons."""
     n_pairs = tp.shape[0]
     nk = offsets.shape[1]
     ox, oy, oz = origin[0], origin[1], origin[2]
@@ -125,52 +202,14 @@ def score(tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, max_terms, 
             qy = tp[i, 1] + offsets[o, k, 1]
             qz = tp[i, 2] + offsets[o, k, 2]
             p = nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz)
-            vx = pts[p, 0] - qx
-            vy = pts[p, 1] - qy
-            vz = pts[p, 2] - qz
-            if surface:
-                ax = nrm[p, 0]
-                ay = nrm[p, 1]
-                az = nrm[p, 2]
-                al = vx * ax + vy * ay + vz * az
-                lx = vx - al * ax
-                ly = vy - al * ay
-                lz = vz - al * az
-                lat = math.sqrt(lx * lx + ly * ly + lz * lz)
-                sh = (lat - rho) / lat if lat > rho else 0.0
-                vx = al * ax + lx * sh
-                vy = al * ay + ly * sh
-                vz = al * az + lz * sh
-            px = prov[o, k, 0]
-            py = prov[o, k, 1]
-            pz = prov[o, k, 2]
-            vn = math.sqrt(vx * vx + vy * vy + vz * vz)
-            if criterion == 0:
-                den = pnorm[k] * vn
-                cosang = (px * vx + py * vy + pz * vz) / den if den > 0 else 0.0
-                term = 0.0
-                if cosang >= cos_lim[k]:       # angle <= limit, without acos
-                    term = 1.0
-                    if abs(pnorm[k] - vn) <= big_w[k] * pnorm[k] / c:
-                        term = 2.0
-                s += term / (2.0 * nk)
-            else:
-                dx = vx - px
-                dy = vy - py
-                dz = vz - pz
-                d = math.sqrt(dx * dx + dy * dy + dz * dz) / max(pnorm[k], 1e-12)
-                sg = a * (1.0 + weights[k])
-                s += weights[k] * math.exp(-d * d / (2.0 * sg * sg)) / wsum
+            s += _term(qx, qy, qz, p, k, o, pts, nrm, prov, pnorm, weights, cos_lim, big_w,
+                       criterion, c, a, wsum, nk, surface, rho)
             done += 1
             if not decided:
-                if s >= threshold - eps:
-                    decided = True
-                    acc = True
-                    at = k + 1
-                elif s + rest[k + 1] < threshold - eps:
-                    decided = True
-                    at = k + 1
-                    if early_exit:
+                d = _decision(s, k, rest, threshold, eps)
+                if d != 0:
+                    decided, acc, at = True, d > 0, k + 1
+                    if d < 0 and early_exit:
                         break
         if not decided:
             acc = s >= threshold - eps
@@ -178,6 +217,574 @@ def score(tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, max_terms, 
         out_acc[i] = acc
         out_at[i] = at
         out_cmp[i] = done
+
+
+# --------------------------------------------------------------------- neighbour cache
+# Cache layout (arrays owned by kernels.NeighbourCache):
+#   root (B,) int32 over a block grid (origin ``bo``, block edge ``hb`` (m), ``bdims`` blocks
+#       per axis, block (i, j, k) at (i * bdims[1] + j) * bdims[2] + k): the root node of each
+#       block, -1 not built, -2 requested, -3 not to be built (grid search)
+#   child (M,) int32: first of the node's 8 children (octant = 4 x-high + 2 y-high + z-high),
+#       -1 for a leaf
+#   lstart (M,) int64, llen (M,) int32: a leaf's candidate list is
+#       ``lists[lstart:lstart + llen]``, sorted-point indices in increasing order
+# A node of depth d under root block (i, j, k) has edge hb / 2**d; its corner is the block
+# corner ``bo + (i, j, k) * hb`` plus ``h / 2`` on every axis where it is in the upper half
+# of its parent (h: the parent's edge), computed the same way by the queries and the builder.
+
+@njit(cache=True, inline="always")
+def _dominated(p, n, cx, cy, cz, e, tol, pts):
+    """True when sample ``n`` is closer than sample ``p`` to every point of the cube of centre
+    c and half-edge ``e`` by more than ``tol`` in squared distance, so that ``p`` can never
+    be the nearest sample of a query in that cube. (|q-p|^2 - |q-n|^2 is linear in q: its
+    minimum over the cube is its value at c minus 2 e |p - n|_1.)"""
+    ax = pts[p, 0] - cx
+    ay = pts[p, 1] - cy
+    az = pts[p, 2] - cz
+    bx = pts[n, 0] - cx
+    by = pts[n, 1] - cy
+    bz = pts[n, 2] - cz
+    g = (ax * ax + ay * ay + az * az) - (bx * bx + by * by + bz * bz)
+    g -= 2.0 * e * (abs(ax - bx) + abs(ay - by) + abs(az - bz))
+    return g > tol
+
+
+@njit(cache=True)
+def _lattice_nearest(cand, m, lx, ly, lz, h, lattice, pts, out):
+    """For the (lattice + 1)^3 points ``l + (a, b, c) h / lattice`` of a cube (corner l, edge
+    ``h``, m), the candidate of ``cand[:m]`` nearest to each (first at equal distance), in
+    ``out`` (index (a * (lattice + 1) + b) * (lattice + 1) + c)."""
+    stp = h / lattice
+    t = 0
+    for ia in range(lattice + 1):
+        qx = lx + ia * stp
+        for ib in range(lattice + 1):
+            qy = ly + ib * stp
+            for ic in range(lattice + 1):
+                qz = lz + ic * stp
+                best = np.inf
+                bi = cand[0]
+                for u in range(m):
+                    p = cand[u]
+                    dx = pts[p, 0] - qx
+                    dy = pts[p, 1] - qy
+                    dz = pts[p, 2] - qz
+                    d2 = dx * dx + dy * dy + dz * dz
+                    if d2 < best:
+                        best = d2
+                        bi = p
+                out[t] = bi
+                t += 1
+
+
+@njit(cache=True)
+def _filter(cand, m, lx, ly, lz, h, pts, sep, lattice, tol):
+    """Keep, in place and in order, the candidates ``cand[:m]`` (sorted-point indices) that
+    no separator dominates on the cube of corner l and edge ``h`` (m), enlarged by h * 1e-6
+    on every side for rounding (:func:`_dominated`). ``sep``: (lattice + 1)^3 samples in the
+    order of :func:`_lattice_nearest` (any samples do; the nearer the box, the more they
+    remove); each candidate is tried first against the separator of the lattice point
+    nearest to it. Returns the new count."""
+    dl = h * 1e-6
+    e = 0.5 * h + dl
+    cx = lx + 0.5 * h
+    cy = ly + 0.5 * h
+    cz = lz + 0.5 * h
+    n1 = lattice + 1
+    uniq = sep.copy()
+    ns = _distinct(uniq, uniq.shape[0])
+    stp = h / lattice
+    w = 0
+    for u in range(m):
+        p = cand[u]
+        ia = min(max(int(round((pts[p, 0] - lx) / stp)), 0), lattice)
+        ib = min(max(int(round((pts[p, 1] - ly) / stp)), 0), lattice)
+        ic = min(max(int(round((pts[p, 2] - lz) / stp)), 0), lattice)
+        n = sep[(ia * n1 + ib) * n1 + ic]
+        keep = n == p or not _dominated(p, n, cx, cy, cz, e, tol, pts)
+        if keep:
+            for t in range(ns):
+                n = uniq[t]
+                if n != p and _dominated(p, n, cx, cy, cz, e, tol, pts):
+                    keep = False
+                    break
+        if keep:
+            cand[w] = p
+            w += 1
+    return w
+
+
+@njit(cache=True)
+def _distinct(a, n):
+    """Move the distinct values of ``a[:n]`` to its front (first occurrences, in order);
+    returns their count."""
+    k = 0
+    for t in range(n):
+        dup = False
+        for v in range(k):
+            if a[v] == a[t]:
+                dup = True
+                break
+        if not dup:
+            a[k] = a[t]
+            k += 1
+    return k
+
+
+@njit(cache=True, inline="always")
+def _box_dominated(x0, x1, y0, y1, z0, z1, n, cx, cy, cz, e, tol, pts):
+    """True when sample ``n`` dominates (:func:`_dominated`) every point of the box
+    [x0, x1] x [y0, y1] x [z0, z1] on the cube of centre c and half-edge ``e``: a lower bound
+    of |c-p|^2 - |c-n|^2 - 2 e |p-n|_1 over the box exceeds ``tol``."""
+    gx = max(x0 - cx, 0.0, cx - x1)
+    gy = max(y0 - cy, 0.0, cy - y1)
+    gz = max(z0 - cz, 0.0, cz - z1)
+    bx = pts[n, 0] - cx
+    by = pts[n, 1] - cy
+    bz = pts[n, 2] - cz
+    l1 = (max(abs(x0 - pts[n, 0]), abs(x1 - pts[n, 0])) +
+          max(abs(y0 - pts[n, 1]), abs(y1 - pts[n, 1])) +
+          max(abs(z0 - pts[n, 2]), abs(z1 - pts[n, 2])))
+    g = (gx * gx + gy * gy + gz * gz) - (bx * bx + by * by + bz * bz) - 2.0 * e * l1
+    return g > tol
+
+
+@njit(cache=True, inline="always")
+def _box_skipped(x0, y0, z0, size, cx, cy, cz, r2, lx, ly, lz, stp, lattice, sep, e, tol,
+                 pts):
+    """True when the cube of corner (x0, y0, z0) and edge ``size`` lies farther than sqrt(r2)
+    from c, or the separator nearest to its centre dominates it (:func:`_box_dominated`)."""
+    gx = max(x0 - cx, 0.0, cx - x0 - size)
+    gy = max(y0 - cy, 0.0, cy - y0 - size)
+    gz = max(z0 - cz, 0.0, cz - z0 - size)
+    if gx * gx + gy * gy + gz * gz > r2:
+        return True
+    n1 = lattice + 1
+    ia = min(max(int(round((x0 + 0.5 * size - lx) / stp)), 0), lattice)
+    ib = min(max(int(round((y0 + 0.5 * size - ly) / stp)), 0), lattice)
+    ic = min(max(int(round((z0 + 0.5 * size - lz) / stp)), 0), lattice)
+    return _box_dominated(x0, x0 + size, y0, y0 + size, z0, z0 + size,
+                          sep[(ia * n1 + ib) * n1 + ic], cx, cy, cz, e, tol, pts)
+
+
+@njit(cache=True)
+def _gather(lx, ly, lz, h, r, sep, lattice, tol, pts, starts, occ, cb, ox, oy, oz, cell, nx,
+            ny, nz):
+    """Candidates of the cube of corner l and edge ``h`` (m): the samples within ``r`` of its
+    centre that no separator ``sep`` dominates on it (:func:`_filter`, same arguments),
+    in increasing order: (array, count). Blocks of cb^3 grid cells with no sample (``occ``
+    0) and boxes of cells or blocks that the separator nearest to them dominates are
+    skipped whole."""
+    buf = np.empty(1024, np.int64)
+    m = 0
+    dl = h * 1e-6
+    e = 0.5 * h + dl
+    cx = lx + 0.5 * h
+    cy = ly + 0.5 * h
+    cz = lz + 0.5 * h
+    stp = h / lattice
+    r2 = r * r
+    i0 = max(0, int(math.floor((cx - r - ox) / cell)))
+    i1 = min(nx - 1, int(math.floor((cx + r - ox) / cell)))
+    j0 = max(0, int(math.floor((cy - r - oy) / cell)))
+    j1 = min(ny - 1, int(math.floor((cy + r - oy) / cell)))
+    k0 = max(0, int(math.floor((cz - r - oz) / cell)))
+    k1 = min(nz - 1, int(math.floor((cz + r - oz) / cell)))
+    mbx = (nx + cb - 1) // cb
+    mby = (ny + cb - 1) // cb
+    mbz = (nz + cb - 1) // cb
+    bc = cb * cell
+    for bi in range(i0 // cb, i1 // cb + 1):
+        x0 = ox + bi * bc
+        for bj in range(j0 // cb, j1 // cb + 1):
+            y0 = oy + bj * bc
+            for bk in range(k0 // cb, k1 // cb + 1):
+                if occ[(bi * mby + bj) * mbz + bk] == 0:
+                    continue
+                z0 = oz + bk * bc
+                if _box_skipped(x0, y0, z0, bc, cx, cy, cz, r2, lx, ly, lz, stp, lattice, sep,
+                                e, tol, pts):
+                    continue
+                for i in range(max(i0, bi * cb), min(i1, bi * cb + cb - 1) + 1):
+                    xa = ox + i * cell
+                    for j in range(max(j0, bj * cb), min(j1, bj * cb + cb - 1) + 1):
+                        ya = oy + j * cell
+                        base = (i * ny + j) * nz
+                        for k in range(max(k0, bk * cb), min(k1, bk * cb + cb - 1) + 1):
+                            c = base + k
+                            if starts[c] == starts[c + 1]:
+                                continue
+                            za = oz + k * cell
+                            if _box_skipped(xa, ya, za, cell, cx, cy, cz, r2, lx, ly, lz, stp,
+                                            lattice, sep, e, tol, pts):
+                                continue
+                            for p in range(starts[c], starts[c + 1]):
+                                dx = pts[p, 0] - cx
+                                dy = pts[p, 1] - cy
+                                dz = pts[p, 2] - cz
+                                if dx * dx + dy * dy + dz * dz <= r2:
+                                    if m == buf.shape[0]:
+                                        nb = np.empty(2 * m, np.int64)
+                                        nb[:m] = buf
+                                        buf = nb
+                                    buf[m] = p
+                                    m += 1
+    return buf, _filter(buf, m, lx, ly, lz, h, pts, sep, lattice, tol)
+
+
+@njit(cache=True)
+def _nearest_call(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz):
+    """:func:`nearest` as a real call: keeps the rare fallback out of the hot loop's code."""
+    return nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz)
+
+
+@njit(cache=True, inline="always")
+def _leaf(qx, qy, qz, root, bo, hb, bdims, child):
+    """Leaf of the cache holding q (>= 0), or -1 outside the cache's blocks, or -(b + 2)
+    when q's root block b is not built."""
+    fi = math.floor((qx - bo[0]) / hb)
+    fj = math.floor((qy - bo[1]) / hb)
+    fk = math.floor((qz - bo[2]) / hb)
+    if (fi < 0 or fj < 0 or fk < 0 or fi >= bdims[0] or fj >= bdims[1] or fk >= bdims[2]):
+        return -1
+    bi = int(fi)
+    bj = int(fj)
+    bk = int(fk)
+    b = (bi * bdims[1] + bj) * bdims[2] + bk
+    n = root[b]
+    if n < 0:
+        return -(b + 2) if n == -1 else -1
+    lx = bo[0] + bi * hb
+    ly = bo[1] + bj * hb
+    lz = bo[2] + bk * hb
+    h = hb
+    while child[n] >= 0:
+        h2 = 0.5 * h
+        oc = 0
+        if qx >= lx + h2:
+            oc += 4
+            lx = lx + h2
+        if qy >= ly + h2:
+            oc += 2
+            ly = ly + h2
+        if qz >= lz + h2:
+            oc += 1
+            lz = lz + h2
+        n = child[n] + oc
+        h = h2
+    return n
+
+
+@njit(cache=True, inline="always")
+def _scan_list(qx, qy, qz, lists, s0, m, pts):
+    """First of the samples ``lists[s0:s0 + m]`` at the smallest squared distance to q."""
+    best = np.inf
+    besti = -1
+    for u in range(s0, s0 + m):
+        p = lists[u]
+        dx = pts[p, 0] - qx
+        dy = pts[p, 1] - qy
+        dz = pts[p, 2] - qz
+        d2 = dx * dx + dy * dy + dz * dz
+        closer = d2 < best
+        best = d2 if closer else best
+        besti = p if closer else besti
+    return besti
+
+
+#: Keypoints whose leaves are looked up together before they are scored (the lookups of a
+#: block overlap in the memory system; at most this many are wasted by an early exit).
+LOOKAHEAD = 8
+
+
+@njit(cache=True, parallel=True, fastmath=False)
+def score_cached(perm, tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, rest,
+                 criterion, c, a, wsum, threshold, early_exit, surface, rho,
+                 pts, nrm, starts, seed, origin, cell, dims,
+                 root, bo, hb, bdims, child, lstart, llen, lists, scan_max,
+                 req, nreq, out_score, out_acc, out_at, out_cmp):
+    """Score pairs ``perm`` (indices into tp / orient / outputs) with the neighbour cache.
+
+    Same outputs as :func:`score`, bit for bit: each keypoint's nearest sample is its
+    leaf's list scanned (:func:`_leaf`, :func:`_scan_list`), or :func:`nearest` when its
+    root block is not built (or the list is longer than ``scan_max``). Pair ``perm[j]`` also
+    records up to ``req.shape[1]`` distinct unbuilt root blocks: ``req[j, :nreq[j]]``.
+    """
+    nk = offsets.shape[1]
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    nx, ny, nz = dims[0], dims[1], dims[2]
+    eps = 1e-12
+    cap = req.shape[1]
+    for j in prange(perm.shape[0]):
+        i = perm[j]
+        o = orient[i]
+        s = 0.0
+        decided = False
+        acc = False
+        at = nk
+        done = 0
+        nr = 0
+        leaves = np.empty(LOOKAHEAD, np.int64)
+        stop = False
+        for k0 in range(0, nk, LOOKAHEAD):
+            k1 = min(k0 + LOOKAHEAD, nk)
+            for k in range(k0, k1):
+                leaves[k - k0] = _leaf(tp[i, 0] + offsets[o, k, 0], tp[i, 1] + offsets[o, k, 1],
+                                       tp[i, 2] + offsets[o, k, 2], root, bo, hb, bdims, child)
+            for k in range(k0, k1):
+                qx = tp[i, 0] + offsets[o, k, 0]
+                qy = tp[i, 1] + offsets[o, k, 1]
+                qz = tp[i, 2] + offsets[o, k, 2]
+                n = leaves[k - k0]
+                if n >= 0 and llen[n] <= scan_max:
+                    p = _scan_list(qx, qy, qz, lists, lstart[n], llen[n], pts)
+                else:
+                    p = _nearest_call(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny,
+                                      nz)
+                    if n <= -2 and nr < cap:
+                        rq = -n - 2
+                        new = True
+                        for u in range(nr):
+                            if req[j, u] == rq:
+                                new = False
+                                break
+                        if new:
+                            req[j, nr] = rq
+                            nr += 1
+                s += _term(qx, qy, qz, p, k, o, pts, nrm, prov, pnorm, weights, cos_lim,
+                           big_w, criterion, c, a, wsum, nk, surface, rho)
+                done += 1
+                if not decided:
+                    d = _decision(s, k, rest, threshold, eps)
+                    if d != 0:
+                        decided, acc, at = True, d > 0, k + 1
+                        if d < 0 and early_exit:
+                            stop = True
+                            break
+            if stop:
+                break
+        if not decided:
+            acc = s >= threshold - eps
+        nreq[j] = nr
+        out_score[i] = s
+        out_acc[i] = acc
+        out_at[i] = at
+        out_cmp[i] = done
+
+
+@njit(cache=True, parallel=True)
+def touched_roots(perm, tp, orient, offsets, n_keys, root, bo, hb, bdims, out):
+    """Unbuilt root blocks (``root`` -1) under keypoints ``0..n_keys - 1`` of pairs ``perm``:
+    ``out[j, k]`` the block of keypoint k of pair perm[j], or -1 (built, requested, or
+    outside the cache's blocks)."""
+    for j in prange(perm.shape[0]):
+        i = perm[j]
+        o = orient[i]
+        for k in range(n_keys):
+            fi = math.floor((tp[i, 0] + offsets[o, k, 0] - bo[0]) / hb)
+            fj = math.floor((tp[i, 1] + offsets[o, k, 1] - bo[1]) / hb)
+            fk = math.floor((tp[i, 2] + offsets[o, k, 2] - bo[2]) / hb)
+            out[j, k] = -1
+            if (fi < 0 or fj < 0 or fk < 0 or fi >= bdims[0] or fj >= bdims[1] or
+                    fk >= bdims[2]):
+                continue
+            b = (int(fi) * bdims[1] + int(fj)) * bdims[2] + int(fk)
+            if root[b] == -1:
+                out[j, k] = b
+
+
+@njit(cache=True)
+def collect_requests(req, nreq, root, out):
+    """Distinct root blocks still to build among the recorded requests ``req[j, :nreq[j]]``
+    (entries < 0 ignored), marked as requested (root -> -2). Returns their count; the blocks
+    in ``out``."""
+    r = 0
+    for j in range(nreq.shape[0]):
+        for u in range(nreq[j]):
+            if req[j, u] < 0:
+                continue
+            b = req[j, u]
+            if root[b] != -1:
+                continue
+            root[b] = -2
+            out[r] = b
+            r += 1
+    return r
+
+
+@njit(cache=True)
+def _build_tree(lx, ly, lz, h, cand, m, pts, tol, leaf_size, max_depth, nchild, nstart, nlen,
+                ent):
+    """Octree of one root block (corner l, edge ``h``, m) over its candidates ``cand[:m]``.
+
+    Node 0 is the root; a node is split into 8 children (octant = 4 x-high + 2 y-high +
+    z-high, child corner ``l + h / 2`` on the high axes) while its list is longer than
+    ``leaf_size`` and it is less than ``max_depth`` levels deep; each child filters its
+    parent's list (:func:`_filter`) with the parent's candidates nearest to its 8 corners.
+    Writes node child / list start / list length (relative to this tree) and the leaf lists
+    while they fit in ``nchild`` and ``ent``; returns the node and entry counts (larger than
+    the room when it did not fit).
+    """
+    # depth-first: stack of pending nodes with their corner, edge, depth and candidates
+    sk_node = np.empty(8 * (max_depth + 1), np.int64)
+    sk_geo = np.empty((8 * (max_depth + 1), 4))
+    sk_depth = np.empty(8 * (max_depth + 1), np.int64)
+    sk_list = [cand[:m].copy()]
+    lat = np.empty(27, np.int64)
+    sep = np.empty(8, np.int64)
+    sk_node[0] = 0
+    sk_geo[0, 0] = lx
+    sk_geo[0, 1] = ly
+    sk_geo[0, 2] = lz
+    sk_geo[0, 3] = h
+    sk_depth[0] = 0
+    top = 1
+    nodes = 1
+    entries = 0
+    while top > 0:
+        top -= 1
+        nd = sk_node[top]
+        x = sk_geo[top, 0]
+        y = sk_geo[top, 1]
+        z = sk_geo[top, 2]
+        e = sk_geo[top, 3]
+        dep = sk_depth[top]
+        lst = sk_list.pop()
+        L = lst.shape[0]
+        if L <= leaf_size or dep >= max_depth:
+            if nd < nchild.shape[0]:
+                nchild[nd] = -1
+                nstart[nd] = entries
+                nlen[nd] = L
+            if entries + L <= ent.shape[0]:
+                for u in range(L):
+                    ent[entries + u] = lst[u]
+            entries += L
+            continue
+        first = nodes
+        nodes += 8
+        if nd < nchild.shape[0]:
+            nchild[nd] = first
+            nstart[nd] = 0
+            nlen[nd] = 0
+        # the 27 points of the node's 3 x 3 x 3 lattice are its children's corners
+        _lattice_nearest(lst, L, x, y, z, e, 2, pts, lat)
+        e2 = 0.5 * e
+        for oc in range(8):
+            hx = (oc >> 2) & 1
+            hy = (oc >> 1) & 1
+            hz = oc & 1
+            t = 0
+            for ia in range(2):
+                for ib in range(2):
+                    for ic in range(2):
+                        sep[t] = lat[((hx + ia) * 3 + hy + ib) * 3 + hz + ic]
+                        t += 1
+            cx = x + e2 if hx else x
+            cy = y + e2 if hy else y
+            cz = z + e2 if hz else z
+            sub = lst.copy()
+            k = _filter(sub, L, cx, cy, cz, e2, pts, sep, 1, tol)
+            sk_node[top] = first + oc
+            sk_geo[top, 0] = cx
+            sk_geo[top, 1] = cy
+            sk_geo[top, 2] = cz
+            sk_geo[top, 3] = e2
+            sk_depth[top] = dep + 1
+            sk_list.append(sub[:k])
+            top += 1
+    return nodes, entries
+
+
+@njit(cache=True, parallel=True)
+def build_roots(blocks, bo, hb, bdims, lattice, tol, slack, leaf_size, max_depth, pts, starts,
+                seed, occ, cb, origin, cell, dims, noff, eoff, nchild, nstart, nlen, ent,
+                counts):
+    """Octrees of root blocks ``blocks`` (linear indices on the block grid), in parallel.
+
+    A root's candidates are the samples within d + 2 r (+ ``slack``) of its centre (d: to
+    its nearest sample, r: half-diagonal of the block enlarged by 1e-6 of its edge),
+    filtered on the block (separators: those nearest to a (lattice + 1)^3 lattice over it;
+    :func:`_gather`, ``occ`` / ``cb``: its block occupancy); then :func:`_build_tree`.
+    Tree t goes to nodes ``noff[t]:noff[t + 1]`` and entries ``eoff[t]:eoff[t + 1]``;
+    ``counts[t]`` = (nodes, entries) it needs (more than its room: build it again with more).
+    """
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    nx, ny, nz = dims[0], dims[1], dims[2]
+    for t in prange(blocks.shape[0]):
+        b = blocks[t]
+        bk = b % bdims[2]
+        bj = (b // bdims[2]) % bdims[1]
+        bi = b // (bdims[2] * bdims[1])
+        lx = bo[0] + bi * hb
+        ly = bo[1] + bj * hb
+        lz = bo[2] + bk * hb
+        cx = lx + 0.5 * hb
+        cy = ly + 0.5 * hb
+        cz = lz + 0.5 * hb
+        nc = nearest(cx, cy, cz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz)
+        dx = pts[nc, 0] - cx
+        dy = pts[nc, 1] - cy
+        dz = pts[nc, 2] - cz
+        r = math.sqrt(dx * dx + dy * dy + dz * dz) + math.sqrt(3.0) * (hb + 2e-6 * hb)
+        # gather with the centre's nearest sample as the only separator, then filter with
+        # the gathered samples nearest to a lattice over the block (exact: a point of the
+        # block has its nearest sample among those the centre's does not dominate)
+        sep = np.full(8, nc, np.int64)
+        buf, m = _gather(lx, ly, lz, hb, r + slack, sep, 1, tol, pts, starts, occ, cb, ox, oy,
+                         oz, cell, nx, ny, nz)
+        if m > 1:
+            sep = np.empty((lattice + 1) ** 3, np.int64)
+            _lattice_nearest(buf, m, lx, ly, lz, hb, lattice, pts, sep)
+            m = _filter(buf, m, lx, ly, lz, hb, pts, sep, lattice, tol)
+        a0, a1 = noff[t], noff[t + 1]
+        e0, e1 = eoff[t], eoff[t + 1]
+        nn, ne = _build_tree(lx, ly, lz, hb, buf, m, pts, tol, leaf_size, max_depth,
+                             nchild[a0:a1], nstart[a0:a1], nlen[a0:a1], ent[e0:e1])
+        counts[t, 0] = nn
+        counts[t, 1] = ne
+
+
+@njit(cache=True)
+def integrate(blocks, noff, eoff, nchild, nstart, nlen, ent, counts, root, child, lstart,
+              llen, lists, used):
+    """Append built trees (:func:`build_roots`; trees that did not fit their room are
+    skipped) to the cache: nodes from ``used[0]``, list entries from ``used[1]`` (both
+    advanced). The cache arrays must have room."""
+    for t in range(blocks.shape[0]):
+        nn = counts[t, 0]
+        ne = counts[t, 1]
+        if nn > noff[t + 1] - noff[t] or ne > eoff[t + 1] - eoff[t]:
+            continue
+        n0 = used[0]
+        e0 = used[1]
+        for u in range(nn):
+            c = nchild[noff[t] + u]
+            child[n0 + u] = c + n0 if c >= 0 else -1
+            lstart[n0 + u] = nstart[noff[t] + u] + e0
+            llen[n0 + u] = nlen[noff[t] + u]
+        for u in range(ne):
+            lists[e0 + u] = ent[eoff[t] + u]
+        used[0] += nn
+        used[1] += ne
+        root[blocks[t]] = n0
+
+
+@njit(cache=True)
+def morton_order(q, lo, step):
+    """Order of points ``q`` (P, 3) along a Z-order curve of cells of edge ``step`` (m) from
+    corner ``lo``: (P,) int64, stable."""
+    keys = np.empty(q.shape[0], np.int64)
+    for i in range(q.shape[0]):
+        key = 0
+        for ax in range(3):
+            v = int((q[i, ax] - lo[ax]) / step)
+            v = min(max(v, 0), (1 << 21) - 1)
+            for bit in range(21):
+                key |= ((v >> bit) & 1) << (3 * bit + (2 - ax))
+        keys[i] = key
+    return np.argsort(keys, kind="mergesort")
+
 
 @njit(cache=True, parallel=True)
 def nearest_many(q, pts, starts, seed, origin, cell, dims, out):

@@ -96,7 +96,7 @@ def _detect_settings(args):
         scene_spacing=args.spacing, early_exit=not args.no_early_exit,
         normal_tolerance_deg=args.normal_tolerance, oriented_normals=args.oriented_normals,
         nms_radius=args.nms_radius, backend=args.backend, device=args.device,
-        keypoint_order=args.keypoint_order)
+        keypoint_order=args.keypoint_order, clearance=not args.no_clearance)
 
 
 def run_detection(scene_geometry, tensor, settings, outdir, progress, scene_name,
@@ -303,6 +303,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="suppression radius in metres (default: the query object's width)")
     p.add_argument("--no-early-exit", action="store_true",
                    help="compare every keypoint of every candidate")
+    p.add_argument("--no-clearance", action="store_true",
+                   help="accept on the score alone, without the clearance test")
     p.add_argument("--backend", choices=("auto", "numba", "numpy", "torch"), default="auto",
                    help="scoring backend; torch runs on a CUDA device when present "
                         "(pip install 'interaction-tensor[torch]')")

@@ -107,6 +107,23 @@ def cmd_evaluate(args) -> int:
     return 0
 
 
+def cmd_tune(args) -> int:
+    from .evaluation.tuning import TuneSettings, tune, write
+
+    st = TuneSettings(examples=_examples(args.examples), objects_dir=_objects_dir(args.objects),
+                      seed=args.seed)
+    log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
+    res = tune(st, log)
+    write(res, args.output)
+    if not args.quiet:
+        for aff, ch in res.chosen.items():
+            print(f"{aff:<8} S_aff {ch['threshold']:.3f}  clearance limit "
+                  f"{ch['clearance_limit']:.2f}")
+        print(f"wrote {args.output}/tuning.md, tuning.json, tuning_pairs.csv in "
+              f"{res.settings['total_seconds']} s")
+    return 0
+
+
 def register(sub) -> None:
     """Add ``examples`` and ``evaluate`` to the ``itensor`` subparsers."""
     p = sub.add_parser("examples", help="the paper's 8 interaction examples")
@@ -124,6 +141,15 @@ def register(sub) -> None:
     q.add_argument("--seed", type=int, default=0)
     q.add_argument("-q", "--quiet", action="store_true")
     q.set_defaults(func=cmd_examples_build)
+
+    p = sub.add_parser("tune", help="tune S_aff and the clearance limit of each affordance on "
+                                    "the procedural validation scenes")
+    p.add_argument("-o", "--output", required=True, help="output directory")
+    p.add_argument("--objects", default=None, help="directory of real query objects")
+    p.add_argument("--examples", nargs="*", help="only these examples (default: all 8)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("-q", "--quiet", action="store_true")
+    p.set_defaults(func=cmd_tune)
 
     p = sub.add_parser("evaluate", help="reproduce the paper's experiments on scenes")
     p.add_argument("--scenes", nargs="+", required=True,

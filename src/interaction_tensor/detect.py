@@ -205,7 +205,7 @@ def _score_all(scene, jobs, backend, index, settings, progress, label):
         if backend == "numba":
             batch = [ScoreJob(scene.points[j.points[sl]], j.orient[sl], j.table, j.threshold, j.vectors,
                               j.rho, j.early_exit) for j in jobs]
-            for i, (s, a, d, c) in enumerate(score_jobs(batch, index)):
+            for i, (s, a, d, c) in enumerate(score_jobs(batch, index, settings.neighbour_cache)):
                 totals[i][sl], acc[i][sl], at[i][sl] = s, a, d
                 cmp_[i] += int(c.sum())
         else:
@@ -309,17 +309,23 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
 
 
 def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = None,
-                progress: bool = False) -> list:
+                progress: bool = False, test_indices=None) -> list:
     """Detect several interactions in one pass over a scene.
 
     The test points and the scene index are shared by all descriptors; each gets its own
     candidates (its N_aff), threshold and :class:`Detection`, identical to what
-    :func:`detect` gives for it alone.
+    :func:`detect` gives for it alone. ``test_indices`` (scene indices) replaces the seeded
+    random draw of ``settings.sample_fraction``.
     """
     settings = settings or DetectSettings()
     t0 = time.perf_counter()
     timings = {}
-    test_idx = _test_points(scene, settings)
+    if test_indices is None:
+        test_idx = _test_points(scene, settings)
+    else:
+        test_idx = np.unique(np.asarray(test_indices, np.int64))
+        if len(test_idx) and (test_idx[0] < 0 or test_idx[-1] >= len(scene)):
+            raise ValueError("test_indices must be indices of the scene's points")
     n_o = settings.n_orientations
     cands, jobs, pp_list, po_list = [], [], [], []
     for tensor in tensors:
@@ -381,7 +387,7 @@ def full_scores(det: Detection, idx: np.ndarray):
 
             scores[redo] = score_pairs_numba(pts, orient, table, det.scene.grid(), 2.0,
                                              det.tensor.vectors, det.scene.spacing,
-                                             early_exit=False)[0]
+                                             early_exit=False, cache=st.neighbour_cache)[0]
         else:
             scores[redo] = score_pairs(pts, orient, table, det.scene, 2.0,
                                        vectors=det.tensor.vectors, early_exit=False).score
@@ -455,7 +461,7 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
 
 
 def detect(scene: Scene, tensor: InteractionTensor, settings: DetectSettings | None = None,
-           progress: bool = False) -> Detection:
+           progress: bool = False, test_indices=None) -> Detection:
     """Find where the interaction of ``tensor`` can happen in ``scene``.
 
     Parameters
@@ -464,5 +470,6 @@ def detect(scene: Scene, tensor: InteractionTensor, settings: DetectSettings | N
     tensor : a fitted or loaded InteractionTensor
     settings : DetectSettings (defaults if None)
     progress : show a progress bar over candidate batches
+    test_indices : scene indices to test instead of a random ``sample_fraction`` of them
     """
-    return detect_many(scene, [tensor], settings, progress)[0]
+    return detect_many(scene, [tensor], settings, progress, test_indices)[0]

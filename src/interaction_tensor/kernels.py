@@ -2,15 +2,19 @@
 
 These compute the same thing as :func:`interaction_tensor.scoring.score_pairs` with SciPy's
 cKDTree, one (test point, orientation) pair per thread, keypoints in weight order, stopping a
-pair as soon as its decision is known. The nearest-neighbour search is exact: it visits grid
-shells around the query until no unvisited cell can hold a closer point.
+pair as soon as its decision is known. Every nearest neighbour is exact: the grid's shell
+search visits shells of cells around the query until no unvisited cell can hold a closer
+point. With :data:`NEIGHBOUR_CACHE` set, :func:`score_jobs` answers them instead from a
+:class:`NeighbourCache` kept on the grid (octrees of "which samples can be nearest in this
+box" lists, built where the queries go; bit-identical results), which pays off only when the
+same space is queried many times (see benchmarks/kernel_speed.py).
 
 Numba is imported lazily; :func:`available` says whether it can be used.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -21,7 +25,40 @@ _KERNELS = None
 MAX_CELLS = 20_000_000
 #: Pairs per work unit handed to a thread by the scoring kernel.
 PARALLEL_CHUNK = 64
-
+#: Score through the :class:`NeighbourCache` (same results). Off: building it costs more
+#: than it saves at the usual test point densities (benchmarks/kernel_speed.py: 0.9x on
+#: kitchen5 at 5 %, 0.4x on living-room4; 1.8x and 5.9x once built).
+NEIGHBOUR_CACHE = False
+#: Neighbour cache (see :class:`NeighbourCache`). Root block edge, in grid cells (a grid cell
+#: is 3 spacings, so 4 spacings).
+CACHE_ROOT_CELLS = 4 / 3
+#: Levels of octree below a root block (leaves down to 2 spacings).
+CACHE_MAX_DEPTH = 1
+#: A node whose list is longer than this is split into 8 children.
+CACHE_LEAF_SIZE = 16
+#: Leaf lists longer than this are not scanned: the query uses the grid search.
+CACHE_SCAN_MAX = 256
+#: Blocks of grid cells (per axis) whose emptiness the cache builder checks at once.
+CACHE_OCC_CELLS = 4
+#: Separators of a box: candidates nearest to a (n + 1)^3 lattice over it.
+CACHE_LATTICE = 2
+#: Memory of one cache (bytes); past it the cache is emptied and rebuilt where needed.
+CACHE_BYTES = 512 * 2**20
+#: Most root blocks (4 bytes each); the block edge doubles until they fit.
+CACHE_MAX_BLOCKS = 16_000_000
+#: Pairs scored between two cache builds (the first round, then doubling up to the most).
+CACHE_FIRST_ROUND = 128
+CACHE_ROUND = 2048
+#: Before each round, the root blocks under the keypoints that this quantile of the last
+#: round's pairs reached are built.
+CACHE_PREPARE_QUANTILE = 0.9
+#: Distinct unbuilt root blocks one pair records per round.
+CACHE_REQUESTS = 16
+#: Room for one root block's tree in a build (nodes, list entries); bigger trees are built
+#: again alone.
+CACHE_TREE_ROOM = (1024, 8192)
+#: Root blocks built per parallel call (bounds the build's scratch memory).
+CACHE_BUILD_BATCH = 512
 
 def available() -> bool:
     """True when Numba imports."""
@@ -45,6 +82,7 @@ class Grid:
     origin : (3,) float64, corner of cell (0, 0, 0)
     cell : float, cell edge (m)
     dims : (3,) int64 cells per axis
+    cache : the :class:`NeighbourCache` of :func:`score_jobs` (None until first used)
     """
 
     points: np.ndarray
@@ -55,6 +93,7 @@ class Grid:
     origin: np.ndarray
     cell: float
     dims: np.ndarray
+    cache: object = field(default=None, repr=False, compare=False)
 
 
 def build_grid(points: np.ndarray, normals: np.ndarray, cell: float) -> Grid:
@@ -97,7 +136,9 @@ def _compile():
         warnings.filterwarnings("ignore", message=".*TBB.*")
         from . import _numba_kernels as nk
 
-        _KERNELS = {"score": nk.score, "nearest_many": nk.nearest_many}
+        _KERNELS = {name: getattr(nk, name) for name in (
+            "score", "score_cached", "nearest_many", "collect_requests", "build_roots",
+            "integrate", "morton_order", "touched_roots")}
     return _KERNELS
 
 
@@ -135,37 +176,243 @@ def _job_args(job: ScoreJob, grid: Grid) -> tuple:
             grid.dims)
 
 
-def score_jobs(jobs: list, grid: Grid) -> list:
+class NeighbourCache:
+    """Exact candidate lists of the nearest scene sample over boxes of space, for one grid.
+
+    Root blocks (cubes of edge ``hb`` on a block grid covering ``lo``..``hi``) are built
+    when a query first lands in them: an octree whose nodes are split in 8 while their list
+    is longer than :data:`CACHE_LEAF_SIZE`, at most :data:`CACHE_MAX_DEPTH` levels deep. A
+    leaf's list holds every sample that can be the nearest one (at the smallest computed
+    squared distance) to some point of its box, enlarged by 1e-6 of its edge: a sample is
+    left out only when another sample is closer to all of the box by more than ``tol``
+    (m^2), so scanning the list gives exactly the grid search's answer. A root gathers the
+    samples within d + 2 r of its centre (d: distance to its nearest sample, r:
+    half-diagonal); children filter their parent's list.
+
+    Attributes
+    ----------
+    lo, hi : (3,) float64, the covered box (m): queries outside use the grid search
+    bo : (3,) float64 corner of block (0, 0, 0) (m); hb : block edge (m); bdims : (3,) int64
+    root : (B,) int32 root node of each block (-1 not built, -2 requested)
+    child, llen : (M,) int32; lstart : (M,) int64; lists : (E,) int32 (see _numba_kernels)
+    used : (2,) int64, nodes and list entries in use
+    tol : squared-distance margin (m^2) for rounding; slack : gather radius margin (m)
+    resets : times the cache was emptied for memory
+    """
+
+    def __init__(self, grid: Grid, lo: np.ndarray, hi: np.ndarray):
+        lo = np.asarray(lo, np.float64)
+        hi = np.asarray(hi, np.float64)
+        hb = CACHE_ROOT_CELLS * grid.cell
+        while np.prod(np.ceil((hi - lo) / hb) + 1) > CACHE_MAX_BLOCKS:
+            hb *= 2.0
+        self.lo, self.hi, self.bo, self.hb = lo, hi, lo.copy(), float(hb)
+        self.bdims = (np.ceil((hi - lo) / hb).astype(np.int64) + 1).clip(1)
+        self.root = np.full(int(np.prod(self.bdims)), -1, np.int32)
+        self.child = np.full(1 << 16, -1, np.int32)
+        self.lstart = np.zeros(1 << 16, np.int64)
+        self.llen = np.zeros(1 << 16, np.int32)
+        self.lists = np.zeros(1 << 20, np.int32)
+        self.used = np.zeros(2, np.int64)
+        self.occ = _block_occupancy(grid, CACHE_OCC_CELLS)
+        m = float(max(np.abs(lo).max(), np.abs(hi).max(), 1.0))
+        self.tol = 1e-13 * (1.0 + m) ** 2
+        self.slack = float(np.sqrt(self.tol)) + 1e-9
+        self.resets = 0
+
+    def covers(self, lo, hi) -> bool:
+        """True when the box lo..hi (m) is inside the covered box."""
+        return bool(np.all(lo >= self.lo) and np.all(hi <= self.hi))
+
+    @property
+    def nbytes(self) -> int:
+        return int(self.root.nbytes + self.child.nbytes + self.lstart.nbytes +
+                   self.llen.nbytes + self.lists.nbytes)
+
+    def state(self) -> tuple:
+        """The arrays :func:`_numba_kernels.score_cached` reads, in its order."""
+        return (self.root, self.bo, self.hb, self.bdims, self.child, self.lstart, self.llen,
+                self.lists, CACHE_SCAN_MAX)
+
+    def _reset(self):
+        self.root[self.root >= 0] = -1
+        self.used[:] = 0
+        self.resets += 1
+
+    def _reserve(self, nodes: int, entries: int) -> bool:
+        """Room for ``nodes`` more nodes and ``entries`` more list entries: False when that
+        would pass :data:`CACHE_BYTES` (the caller empties the cache)."""
+        need_n = int(self.used[0]) + nodes
+        need_e = int(self.used[1]) + entries
+        cap_n, cap_e = len(self.child), len(self.lists)
+        if need_n <= cap_n and need_e <= cap_e:
+            return True
+        if self.root.nbytes + need_n * 16 + need_e * 4 > CACHE_BYTES:
+            return False
+        new_n = cap_n if need_n <= cap_n else max(need_n, 2 * cap_n)
+        new_e = cap_e if need_e <= cap_e else max(need_e, 2 * cap_e)
+        if self.root.nbytes + new_n * 16 + new_e * 4 > CACHE_BYTES:
+            new_n, new_e = max(cap_n, need_n), max(cap_e, need_e)
+        n0, e0 = int(self.used[0]), int(self.used[1])
+        if new_n > cap_n:
+            for name, fill in (("child", -1), ("lstart", 0), ("llen", 0)):
+                old = getattr(self, name)
+                arr = np.full(new_n, fill, old.dtype)
+                arr[:n0] = old[:n0]
+                setattr(self, name, arr)
+        if new_e > cap_e:
+            arr = np.zeros(new_e, np.int32)
+            arr[:e0] = self.lists[:e0]
+            self.lists = arr
+        return True
+
+    def prepare(self, grid: Grid, perm, tp, orient, offsets, n_keys: int):
+        """Build the root blocks that keypoints ``0..n_keys - 1`` of pairs ``perm`` land in."""
+        k = _compile()
+        touched = np.empty((len(perm), n_keys), np.int64)
+        k["touched_roots"](perm, tp, orient, offsets, n_keys, self.root, self.bo, self.hb,
+                           self.bdims, touched)
+        self.update(grid, touched, np.full(len(perm), n_keys, np.int64))
+
+    def update(self, grid: Grid, req: np.ndarray, nreq: np.ndarray):
+        """Build the root blocks ``req[j, :nreq[j]]`` (entries < 0 ignored) that are not
+        built yet, e.g. those the last round of queries asked for (see
+        :func:`_numba_kernels.score_cached`)."""
+        total = int(nreq.sum())
+        if total == 0:
+            return
+        k = _compile()
+        blocks = np.empty(total, np.int64)
+        blocks = blocks[:k["collect_requests"](req, nreq, self.root, blocks)]
+        for start in range(0, len(blocks), CACHE_BUILD_BATCH):
+            self._build(grid, blocks[start:start + CACHE_BUILD_BATCH])
+
+    def _build(self, grid: Grid, blocks: np.ndarray, room=None):
+        """Build root blocks ``blocks`` and add them to the cache (``room``: (T, 2) nodes and
+        entries per tree, default :data:`CACHE_TREE_ROOM`)."""
+        k = _compile()
+        t = len(blocks)
+        if room is None:
+            room = np.tile(np.array(CACHE_TREE_ROOM, np.int64), (t, 1))
+        noff = np.zeros(t + 1, np.int64)
+        eoff = np.zeros(t + 1, np.int64)
+        np.cumsum(room[:, 0], out=noff[1:])
+        np.cumsum(room[:, 1], out=eoff[1:])
+        nchild = np.empty(int(noff[-1]), np.int32)
+        nstart = np.empty(int(noff[-1]), np.int64)
+        nlen = np.empty(int(noff[-1]), np.int32)
+        ent = np.empty(int(eoff[-1]), np.int32)
+        counts = np.zeros((t, 2), np.int64)
+        k["build_roots"](blocks, self.bo, self.hb, self.bdims, CACHE_LATTICE, self.tol,
+                         self.slack, CACHE_LEAF_SIZE, CACHE_MAX_DEPTH, grid.points,
+                         grid.starts, grid.seed, self.occ, CACHE_OCC_CELLS, grid.origin,
+                         grid.cell, grid.dims, noff, eoff, nchild, nstart, nlen, ent, counts)
+        fits = (counts[:, 0] <= room[:, 0]) & (counts[:, 1] <= room[:, 1])
+        nodes, entries = int(counts[fits, 0].sum()), int(counts[fits, 1].sum())
+        if not self._reserve(nodes, entries):
+            self._reset()
+            if not self._reserve(nodes, entries):
+                self.root[blocks[fits]] = -3     # too big for the budget: grid search
+                fits[:] = False
+        k["integrate"](blocks, noff, eoff, nchild, nstart, nlen, ent,
+                       np.where(fits[:, None], counts, np.iinfo(np.int64).max), self.root,
+                       self.child, self.lstart, self.llen, self.lists, self.used)
+        again = np.flatnonzero(~fits & (counts[:, 0] > 0))
+        again = again[(counts[again, 0] > room[again, 0]) | (counts[again, 1] > room[again, 1])]
+        if len(again):                      # trees bigger than their room: once more
+            self._build(grid, blocks[again], counts[again])
+
+
+def _block_occupancy(grid: Grid, cb: int) -> np.ndarray:
+    """(ceil(nx / cb) * ceil(ny / cb) * ceil(nz / cb),) int8: 1 where a block of cb^3 grid
+    cells holds a sample."""
+    nx, ny, nz = (int(v) for v in grid.dims)
+    full = (np.diff(grid.starts) > 0).reshape(nx, ny, nz)
+    mb = [-(-v // cb) for v in (nx, ny, nz)]
+    pad = np.zeros([v * cb for v in mb], bool)
+    pad[:nx, :ny, :nz] = full
+    occ = pad.reshape(mb[0], cb, mb[1], cb, mb[2], cb).any(axis=(1, 3, 5))
+    return np.ascontiguousarray(occ.ravel(), dtype=np.int8)
+
+
+def _cache_for(grid: Grid, points: np.ndarray, offsets: np.ndarray) -> NeighbourCache:
+    """The grid's cache, (re)made to cover the scene and every query of these pairs."""
+    reach = np.abs(offsets).reshape(-1, 3).max(axis=0) + grid.cell
+    scene_lo = grid.origin
+    scene_hi = grid.origin + grid.dims * grid.cell
+    lo = np.minimum(scene_lo, points.min(axis=0)) - reach
+    hi = np.maximum(scene_hi, points.max(axis=0)) + reach
+    cache = grid.cache
+    if cache is None or not cache.covers(lo, hi):
+        if cache is not None:
+            lo, hi = np.minimum(lo, cache.lo), np.maximum(hi, cache.hi)
+        grid.cache = cache = NeighbourCache(grid, lo, hi)
+    return cache
+
+
+def score_jobs(jobs: list, grid: Grid, cache: bool | None = None) -> list:
     """Score several jobs (e.g. several affordances) over one scene grid.
 
     Every nearest neighbour is exact: the results are identical to
-    :func:`interaction_tensor.scoring.score_pairs`. Returns, per job, (score, accepted,
-    decided_at, comparisons) arrays over its pairs.
+    :func:`interaction_tensor.scoring.score_pairs`, and bit for bit the same with or
+    without the neighbour cache (``cache``; None: :data:`NEIGHBOUR_CACHE`). Returns, per
+    job, (score, accepted, decided_at, comparisons) arrays over its pairs.
     """
-    k = _compile()
+    use_cache = NEIGHBOUR_CACHE if cache is None else bool(cache)
+    import numba
+
     outs = []
     for job in jobs:
         p = len(job.points)
         out = (np.zeros(p), np.zeros(p, np.bool_), np.zeros(p, np.int64), np.zeros(p, np.int64))
         if p:
-            import numba
-
             # pairs differ a lot in cost (an accepted pair compares every keypoint): hand
             # them to the threads in small chunks rather than one static half each
             previous = numba.set_parallel_chunksize(PARALLEL_CHUNK)
             try:
-                k["score"](np.ascontiguousarray(job.points, dtype=np.float64),
-                           np.ascontiguousarray(job.orient, np.int64), *_job_args(job, grid),
-                           *out)
+                tp = np.ascontiguousarray(job.points, dtype=np.float64)
+                orient = np.ascontiguousarray(job.orient, np.int64)
+                if use_cache:
+                    _score_cached(job, tp, orient, grid, out)
+                else:
+                    _compile()["score"](tp, orient, *_job_args(job, grid), *out)
             finally:
                 numba.set_parallel_chunksize(previous)
         outs.append(out)
     return outs
 
 
+def _score_cached(job: ScoreJob, tp: np.ndarray, orient: np.ndarray, grid: Grid, out: tuple):
+    """One job through the grid's :class:`NeighbourCache`: pairs in Z-order of their test
+    points, in rounds (:data:`CACHE_FIRST_ROUND` pairs, doubling up to :data:`CACHE_ROUND`);
+    before a round the root blocks under the keypoints most pairs reached last round are
+    built, after it those its queries still missed."""
+    k = _compile()
+    p = len(tp)
+    args = _job_args(job, grid)
+    args = args[:6] + args[7:]                  # score_cached has no max_terms
+    cache = _cache_for(grid, tp, args[0])
+    perm = k["morton_order"](tp, cache.lo, cache.hb)
+    n = min(CACHE_ROUND, p)
+    req = np.empty((n, CACHE_REQUESTS), np.int64)
+    nreq = np.zeros(n, np.int64)
+    nk = job.table.n
+    depth = nk                                  # keypoints reached per pair, so far
+    start, size = 0, CACHE_FIRST_ROUND
+    while start < p:
+        sub = perm[start:start + size]
+        m = len(sub)
+        cache.prepare(grid, sub, tp, orient, args[0], min(nk, depth))
+        k["score_cached"](sub, tp, orient, *args, *cache.state(), req[:m], nreq[:m], *out)
+        cache.update(grid, req[:m], nreq[:m])
+        depth = int(np.quantile(out[3][sub], CACHE_PREPARE_QUANTILE))
+        start += m
+        size = min(2 * size, CACHE_ROUND)
+
+
 def score_pairs_numba(points, orient, table, grid: Grid, threshold: float, vectors: str,
-                      rho: float, early_exit: bool = True):
+                      rho: float, early_exit: bool = True, cache: bool | None = None):
     """Numba version of :func:`interaction_tensor.scoring.score_pairs` (one job of
     :func:`score_jobs`). Returns score, accepted, decided_at, comparisons-per-pair arrays."""
     job = ScoreJob(points, orient, table, threshold, vectors, rho, early_exit)
-    return score_jobs([job], grid)[0]
+    return score_jobs([job], grid, cache)[0]

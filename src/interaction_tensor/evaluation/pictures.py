@@ -31,15 +31,19 @@ def _samples(geometry, spacing: float, seed: int = 0, limit: int = 2_500_000):
 
 
 def closeup(scene_points, scene_normals, query_points, query_normals, pose, colour,
-            margin: float = 0.25, size=PANEL, azimuths=(210, 300, 30, 120),
+            margin: float | None = None, size=PANEL, azimuths=(210, 300, 30, 120),
             elevation: float = 22.0, spacing: float = 0.01) -> np.ndarray:
-    """(H, W, 3) uint8: the posed query object and the scene within ``margin`` (m) of it."""
+    """(H, W, 3) uint8: the posed query object and the scene within ``margin`` (m; default
+    the object's size, at least 0.3 m, and 0.4 m above it: a tap over a mug) of it."""
     from ..viz.raster import Canvas, frame_points
 
     rot, t = pose[:3, :3], pose[:3, 3]
     q = query_points @ rot.T + t
     qn = query_normals @ rot.T
+    if margin is None:
+        margin = max(0.3, float(np.ptp(q, axis=0).max()))
     lo, hi = q.min(axis=0) - margin, q.max(axis=0) + margin
+    hi[2] = max(hi[2], q[:, 2].max() + 0.4)
     keep = np.all((scene_points >= lo) & (scene_points <= hi), axis=1)
     sp, sn = scene_points[keep], scene_normals[keep]
     frame = np.vstack([q, [lo, hi]])

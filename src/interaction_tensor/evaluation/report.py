@@ -103,9 +103,11 @@ def write_all(res, out: Path) -> None:
               ["scene", "example", "affordance", "method", "candidates", "pairs", "accepted",
                "any_accepted"])
     judg = [{k: v for k, v in j.items() if not k.startswith("_")} for j in res.judgements]
+    for j, src in zip(judg, res.judgements):
+        j["pose"] = " ".join(f"{v:.6g}" for v in np.asarray(src["_pose"]).ravel())
     write_csv(out / "judgements.csv", judg,
               ["scene", "example", "affordance", "method", "group", "rank", "score", "accepted",
-               "valid", "x", "y", "z", "penetration_m", "contact", "reasons"])
+               "valid", "x", "y", "z", "penetration_m", "contact", "reasons", "pose"])
     # per-example precision of the top 5, for the discussion
     per_ex = []
     for ex in sorted({j["example"] for j in judg}):

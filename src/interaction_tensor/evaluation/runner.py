@@ -200,7 +200,8 @@ def evaluate(scenes, out_dir, settings: EvalSettings | None = None, log=print) -
                 if m.startswith("iT"):
                     kp = m.split("-")[1]
                     det = it.detect(scene, tensor, it.DetectSettings(
-                        sample_fraction=frac, keypoints=kp, top_k=0, seed=st.seed))
+                        sample_fraction=frac, keypoints=kp, top_k=0, seed=st.seed,
+                        neighbour_cache=True))
                     cand = det.candidate_indices
                     point, orient = det.pair_point, det.pair_orientation
                     acc = det.pairs.accepted

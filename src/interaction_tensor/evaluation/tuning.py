@@ -5,12 +5,16 @@ that are not the 14 published ones (:mod:`..examples.validation`: living rooms, 
 offices and a garage with chairs, sofas, beds, benches, rails, pegs, taps, a motorbike-like
 frame...), with the judge (:mod:`.judge`, itself proven on :mod:`.labelled`) as the label:
 
-1. every example's descriptor searches every validation scene (seeded test points, the
-   paper's normal filter), accepting down to a low floor score (:data:`FLOORS`) so that every
-   pair above it is scored in full, and counting each such pair's clearance violations;
-2. judged: the top-5 poses (after suppression) at every clearance limit tried, a stratified
-   sample of the pairs above the floor (by 0.05 score band and by violation band, weighted by
-   the band's size) and a random sample of the pairs below it, scored again in full;
+1. every example's descriptor is tried on every validation scene at two kinds of test
+   points: every scene point within ``near_site`` (3 cm) of a site of any kind or of a fill
+   site's tap outlet (where the
+   valid places and the hardest negatives are), and a seeded random ``background`` fraction
+   (0.5 %) of the others; the paper's normal filter, every pair scored in full, and each
+   pair's clearance violations counted;
+2. judged: a stratified sample of the pairs (by 0.05 score band and by clearance violation
+   band, in each of the two kinds), each pair weighted by the inverse of its probability of
+   being drawn (Horvitz-Thompson: a background pair stands for 1 / 0.005 pairs of a dense
+   search, a near-site pair for one), and the top-5 poses at every clearance limit tried;
 3. for each threshold t and clearance limit v, the pair decisions (score >= t and at most a
    fraction v of the clearance points violated) are compared with the judge: precision,
    recall and F1, estimated with the sample weights, pooled over each affordance's examples
@@ -37,12 +41,7 @@ THRESHOLDS = tuple(np.round(np.r_[np.arange(0.02, 0.30, 0.01), np.arange(0.30, 0
                             3))
 #: Clearance limits tried (fraction of the clearance points a placement may violate).
 LIMITS = (0.02, 0.05, 0.10, 0.20)
-#: Per affordance: the floor score down to which pairs are scored in full (below the lowest
-#: score a valid pose of the labelled set gets, :mod:`.labelled`), and the fraction of scene
-#: points drawn (higher where the interaction needs a small part: a rail top, a tap outlet).
-FLOORS = {"placing": 0.5, "sitting": 0.25, "filling": 0.15, "riding": 0.06, "hanging": 0.03}
-FRACTIONS = {"placing": 0.01, "sitting": 0.015, "filling": 0.03, "riding": 0.02,
-             "hanging": 0.04}
+
 
 
 @dataclass
@@ -53,9 +52,9 @@ class TuneSettings:
     examples: tuple = ()
     objects_dir: str | None = None
     spacing: float = 0.01
-    fraction_scale: float = 1.0
-    per_band: int = 8
-    below_floor: int = 150
+    near_site: float = 0.03
+    background: float = 0.005
+    per_band: int = 6
     top_k: int = 5
     seed: int = 0
 
@@ -90,7 +89,7 @@ def _violation_band(v: np.ndarray, k: int) -> np.ndarray:
 def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
     """Run the tuning (module docstring) and choose (S_aff, V_aff) per affordance."""
     import interaction_tensor as it
-    from ..detect import detect, full_scores, suppression_radius
+    from ..detect import detect, suppression_radius
     from ..examples import interactions, validation
     from ..predictions import top_k
     from .judge import Judge, JudgeScene
@@ -98,8 +97,7 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
     st = settings or TuneSettings()
     names = list(st.examples) or interactions.names()
     scenes = list(st.scenes) or validation.scene_names()
-    res = TuneResult(settings={**asdict(st), "floors": FLOORS, "fractions": FRACTIONS,
-                               "limits": LIMITS})
+    res = TuneResult(settings={**asdict(st), "limits": LIMITS})
     t0 = time.perf_counter()
     models = {}
     for n in names:
@@ -113,40 +111,40 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
         scene = it.prepare_scene(vs.geometry, st.spacing, seed=st.seed)
         jscene = JudgeScene(vs.geometry)
         kinds = vs.counts()
+        # the sites, and above each fill site its tap outlet (filling's test points are there)
+        sites = np.array([s.point for s in vs.sites]
+                         + [np.add(s.point, (0, 0, s.width)) for s in vs.sites if s.kind == "fill"],
+                         float).reshape(-1, 3)
+        near = np.zeros(len(scene), bool)
+        for group in scene.tree.query_ball_point(sites, st.near_site):
+            near[np.asarray(group, np.int64)] = True
+        others = np.flatnonzero(~near)
+        back = np.sort(rng.choice(others, max(1, int(round(st.background * len(others)))),
+                                  replace=False))
+        test = np.union1d(np.flatnonzero(near), back)
         for n in names:
             ex, tensor, judge = models[n]
             aff = ex.spec.affordance
             t1 = time.perf_counter()
             det = detect(scene, tensor, it.DetectSettings(
-                sample_fraction=min(1.0, FRACTIONS[aff] * st.fraction_scale),
-                threshold=FLOORS[aff], clearance_max_violations=1.0, top_k=0, seed=st.seed))
+                threshold=1e-9, clearance_max_violations=1.0, top_k=0, seed=st.seed,
+                neighbour_cache=True),
+                test_indices=test)
             k = len(tensor.clearance_points)
-            score = det.pairs.score.copy()
-            viol = det.clearance_violations.copy()
-            full = np.flatnonzero(det.score_accepted)          # scored in full, above the floor
-            below = np.flatnonzero(~det.score_accepted)
+            score, viol = det.pairs.score, det.clearance_violations
             pos = scene.points[det.pair_point]
+            is_near = near[det.pair_point]
+            weight = np.where(is_near, 1.0, len(others) / len(back))
             radius = suppression_radius(tensor, det.settings)
-            chosen = {}
             tops = set()
+            allp = np.arange(len(score))
             for lim in LIMITS:                                # the top 5 at every limit
-                ok = full[viol[full] <= lim * k]
+                ok = allp[viol <= lim * k]
                 tops |= set(ok[top_k(pos[ok], score[ok], st.top_k, radius)].tolist())
-            bands = np.floor(score[full] / 0.05).astype(int) * 10 + _violation_band(viol[full], k)
-            pick, weight = _sample(bands, full, st.per_band, rng)
-            chosen.update(zip(pick.tolist(), weight.tolist()))
-            if len(below):                                    # the rest, scored again in full
-                sub = np.sort(rng.choice(below, min(st.below_floor, len(below)), replace=False))
-                f, _ = full_scores(det, sub)
-                from ..clearance import clearance_offsets, nearest_distance_function, violations
-                viol[sub] = violations(scene.points[det.pair_point[sub]],
-                                       det.pair_orientation[sub],
-                                       clearance_offsets(tensor, det.settings.n_orientations),
-                                       tensor.clearance_radius, det.settings.clearance_tolerance,
-                                       nearest_distance_function(
-                                           scene, bound=float(tensor.clearance_radius.max())))
-                score[sub] = f
-                chosen.update(zip(sub.tolist(), [len(below) / len(sub)] * len(sub)))
+            bands = (np.floor(score / 0.05).astype(int) * 100 + _violation_band(viol, k) * 10
+                     + is_near)
+            pick, frac = _sample(bands, allp, st.per_band, rng)
+            chosen = {int(i): float(w * weight[i]) for i, w in zip(pick, frac)}
             for i in tops:
                 chosen.setdefault(i, 0.0)                    # judged, not in the estimate
             for i, w in chosen.items():
@@ -155,16 +153,17 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
                 v = judge.judge(jscene, pose)
                 res.rows.append({
                     "scene": sname, "example": n, "affordance": aff, "pair": int(i),
+                    "near_site": bool(is_near[i]),
                     "score": round(float(score[i]), 5), "violations": int(viol[i]),
                     "clearance_points": k, "weight": round(w, 4), "top": i in tops,
                     "valid": bool(v.valid), "reasons": "; ".join(v.reasons)})
             res.runs.append({"scene": sname, "example": n, "affordance": aff,
                              "sites": int(kinds.get(SITE_OF[aff], 0)),
-                             "pairs": int(len(score)), "full": int(len(full)),
+                             "pairs": int(len(score)), "near_site_pairs": int(is_near.sum()),
                              "seconds": round(time.perf_counter() - t1, 2)})
             judged = res.rows[-len(chosen):]
-            log(f"{sname:>15} {n:<16} pairs {len(score):>7} above floor {len(full):>6} judged "
-                f"{len(chosen):>4} (valid {sum(r['valid'] for r in judged):>3}) sites "
+            log(f"{sname:>15} {n:<16} pairs {len(score):>6} (near sites {int(is_near.sum()):>5}) "
+                f"judged {len(chosen):>4} (valid {sum(r['valid'] for r in judged):>3}) sites "
                 f"{kinds.get(SITE_OF[aff], 0)} {time.perf_counter() - t1:.0f} s")
     res.curves, res.chosen = choose(res.rows, res.runs)
     res.settings["total_seconds"] = round(time.perf_counter() - t0, 1)
@@ -226,7 +225,7 @@ def write(res: TuneResult, out_dir) -> None:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_csv(out / "tuning_pairs.csv", res.rows,
-              ["scene", "example", "affordance", "pair", "score", "violations",
+              ["scene", "example", "affordance", "pair", "near_site", "score", "violations",
                "clearance_points", "weight", "top", "valid", "reasons"])
     write_json(out / "tuning.json", {"settings": res.settings, "chosen": res.chosen,
                                      "runs": res.runs, "curves": res.curves})
