@@ -89,11 +89,12 @@ def test_rank_pairs_is_the_exact_best_and_worst_by_full_score(bowl):
     assert worst.tolist() == top_k(pos, -full, 5, 0.15)
 
 
-def test_tuning_chooses_the_threshold_of_best_f1():
+def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
     def row(score, valid, weight=1.0, viol=0):
         return {"affordance": "placing", "scene": "s", "example": "placing-bowl",
                 "score": score, "valid": valid, "weight": weight, "violations": viol,
-                "clearance_points": 100}
+                "clearance_points": 100, "top": score > 0.8, "pair": 0, "near_site": True,
+                "reasons": ""}
     rows = ([row(0.9, True)] * 8 + [row(0.7, True)] * 2 + [row(0.6, False)] * 6
             + [row(0.95, False, viol=50)] * 4 + [row(0.2, False, weight=10)] * 3)
     c = {r["threshold"]: r for r in curve(rows, limit=0.05)}
@@ -103,6 +104,18 @@ def test_tuning_chooses_the_threshold_of_best_f1():
     _, chosen = choose(rows, runs)
     assert 0.6 < chosen["placing"]["threshold"] <= 0.7
     assert chosen["placing"]["clearance_limit"] < 0.5
+
+    # the tuning's record is written as one transaction and replaces an earlier one
+    from interaction_tensor.evaluation.tuning import TuneResult, write
+
+    curves, chosen = choose(rows, runs)
+    res = TuneResult(rows=rows, runs=runs, curves=curves, chosen=chosen, settings={"seed": 0})
+    for _ in range(2):
+        write(res, tmp_path / "tuning")
+    assert sorted(p.name for p in (tmp_path / "tuning").iterdir()) == [
+        "tuning.json", "tuning.md", "tuning_pairs.csv"]
+    assert "| placing |" in (tmp_path / "tuning" / "tuning.md").read_text()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["tuning"]
 
 
 def test_train_with_a_tuned_acceptance_and_detect_without_clearance(tmp_path):

@@ -66,3 +66,66 @@ def test_evaluate_bad_input_is_one_line_error(tmp_path, capsys):
     assert main(["evaluate", "--scenes", str(tmp_path), "-o", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert err.count("itensor: error:") == 2
+
+
+def test_evaluate_merge_equals_one_run(tmp_path, capsys):
+    """Runs on disjoint scene subsets merge into the table one run over all scenes gives."""
+    from interaction_tensor.cli_eval import main
+
+    s1 = shared_file("scenes/office-desk1.ply")
+    s2 = shared_file("scenes/office-desk5.ply")
+    common = ["--examples", "placing-bowl", "--test-points", "400", "--methods",
+              "iT-weighted,Naive", "--max-candidates", "6", "--seed", "0", "--quiet"]
+    for name, scenes in (("a", [s1]), ("b", [s2]), ("ab", [s1, s2])):
+        assert main(["evaluate", "--scenes", *map(str, scenes), "-o",
+                     str(tmp_path / name), *common]) == 0
+    out = tmp_path / "merged"
+    assert main(["evaluate-merge", str(tmp_path / "a"), str(tmp_path / "b"), "-o", str(out),
+                 "--quiet"]) == 0
+    for name in ("table1.csv", "runs.csv", "judgements.csv"):
+        assert (out / name).read_text() == (tmp_path / "ab" / name).read_text(), name
+    assert sorted(p.name for p in (out / "pictures").glob("*.png")) == sorted(
+        p.name for p in (tmp_path / "ab" / "pictures").glob("*.png"))
+
+    # refused: the same scene twice, other settings, a damaged record; the output untouched
+    before = (out / "table1.csv").read_text()
+    assert main(["evaluate-merge", str(tmp_path / "a"), str(tmp_path / "ab"), "-o",
+                 str(out)]) == 2
+    assert main(["evaluate", "--scenes", str(s2), "-o", str(tmp_path / "c"),
+                 *common[:-3], "--seed", "1", "--quiet", "--no-pictures"]) == 0
+    assert main(["evaluate-merge", str(tmp_path / "a"), str(tmp_path / "c"), "-o",
+                 str(out)]) == 2
+    path = tmp_path / "b" / "judgements.csv"
+    path.write_text(path.read_text().replace(" 0 0 0 1\n", " 0 0 1\n", 1))
+    assert main(["evaluate-merge", str(tmp_path / "a"), str(tmp_path / "b"), "-o",
+                 str(out)]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 3 and all(e.startswith("itensor: error:") for e in err), err
+    assert "office-desk1" in err[0] and "seed" in err[1] and "16" in err[2]
+    assert (out / "table1.csv").read_text() == before
+
+
+def test_atomic_dir_keeps_the_earlier_result_on_failure(tmp_path):
+    from interaction_tensor.errors import InputError
+    from interaction_tensor.io import atomic_dir
+
+    out = tmp_path / "out"
+    with atomic_dir(out, "run.json") as d:
+        (d / "run.json").write_text("1")
+    assert (out / "run.json").read_text() == "1"
+    with pytest.raises(RuntimeError):
+        with atomic_dir(out, "run.json") as d:
+            (d / "run.json").write_text("2")
+            raise RuntimeError("interrupted")
+    assert (out / "run.json").read_text() == "1"          # the complete earlier result
+    with atomic_dir(out, "run.json") as d:
+        (d / "run.json").write_text("3")
+    assert (out / "run.json").read_text() == "3"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]   # no staging left behind
+    other = tmp_path / "mine"
+    other.mkdir()
+    (other / "notes.txt").write_text("keep me")
+    with pytest.raises(InputError, match="not an earlier output"):
+        with atomic_dir(other, "run.json"):
+            pass
+    assert (other / "notes.txt").read_text() == "keep me"

@@ -124,6 +124,17 @@ def cmd_tune(args) -> int:
     return 0
 
 
+def cmd_evaluate_merge(args) -> int:
+    from .evaluation.merge import merge
+    from .evaluation.report import table_markdown
+
+    log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
+    res = merge(args.runs, args.output, log)
+    if not args.quiet:
+        print(table_markdown(res.table, tuple(res.settings.get("methods") or ())))
+    return 0
+
+
 def register(sub) -> None:
     """Add ``examples`` and ``evaluate`` to the ``itensor`` subparsers."""
     p = sub.add_parser("examples", help="the paper's 8 interaction examples")
@@ -174,6 +185,13 @@ def register(sub) -> None:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("-q", "--quiet", action="store_true")
     p.set_defaults(func=cmd_evaluate)
+
+    p = sub.add_parser("evaluate-merge",
+                       help="merge `itensor evaluate` runs made on disjoint scene subsets")
+    p.add_argument("runs", nargs="+", help="output directories of the runs (same settings)")
+    p.add_argument("-o", "--output", required=True, help="output directory")
+    p.add_argument("-q", "--quiet", action="store_true")
+    p.set_defaults(func=cmd_evaluate_merge)
 
 
 def main(argv=None) -> int:

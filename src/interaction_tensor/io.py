@@ -9,6 +9,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -273,6 +274,45 @@ def atomic_path(path):
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
+
+
+@contextlib.contextmanager
+def atomic_dir(path, marker: str):
+    """Yield a fresh temporary directory beside ``path``; swap it in for ``path`` on success.
+
+    An interrupted or failed run leaves ``path`` as it was (the earlier complete result, or
+    nothing). ``path`` may already exist only as an earlier output of the same command: empty,
+    or holding ``marker`` (e.g. ``run.json``); a directory holding other files is refused rather
+    than replaced.
+    """
+    path = Path(path)
+    if path.exists():
+        if not path.is_dir():
+            raise InputError(path, "exists and is not a directory")
+        if any(path.iterdir()) and not (path / marker).exists():
+            raise InputError(path, f"exists and holds files that are not an earlier output "
+                                   f"(no {marker}); give a new or empty directory")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent))
+    os.chmod(tmp, 0o777 & ~_umask())
+    try:
+        yield tmp
+        old = None
+        if path.exists():
+            old = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".old", dir=path.parent))
+            os.replace(path, old / "previous")
+        os.replace(tmp, path)
+        if old is not None:
+            shutil.rmtree(old, ignore_errors=True)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _umask() -> int:
+    umask = os.umask(0)
+    os.umask(umask)
+    return umask
 
 
 def write_json(path, obj) -> None:

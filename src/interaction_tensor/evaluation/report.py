@@ -122,6 +122,11 @@ def write_all(res, out: Path) -> None:
     cols = ["affordance", "weighted_accepted", "weighted_mean", "weighted_top20_mean",
             "uniform_accepted", "uniform_mean", "uniform_top20_mean", "uniform_extra_percent"]
     write_csv(out / "sampling.csv", samp, cols)
+    # the per-run records behind it (so that `itensor evaluate-merge` can combine runs)
+    write_csv(out / "sampling_runs.csv", res.sampling,
+              ["example", "affordance", "scene", "keypoints", "pairs", "accepted",
+               "comparisons_to_accept_sum", "comparisons_to_accept_top20_sum",
+               "accepted_top20", "mean_comparisons_per_decision"])
     lines = ["| affordance | accepted (weighted) | comparisons to accept, weighted | top 20 % | "
              "accepted (uniform) | comparisons to accept, uniform | top 20 % | uniform extra |",
              "|---|---:|---:|---:|---:|---:|---:|---:|"]

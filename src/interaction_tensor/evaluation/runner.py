@@ -127,18 +127,14 @@ def evaluate(scenes, out_dir, settings: EvalSettings | None = None, log=print) -
     Parameters
     ----------
     scenes : scene files or directories of them (metres, +Z up)
-    out_dir : output directory (created)
+    out_dir : output directory: new, empty, or an earlier evaluation's (replaced only
+        when the new run is complete)
     settings : :class:`EvalSettings`
     log : callable(str) for progress lines (``lambda s: None`` for quiet)
     """
-    import interaction_tensor as it
-    from ..baselines.bisector_icp import bisector_baseline
-    from ..baselines.common import capped_candidates
     from ..baselines.icp import resolve_backend
-    from ..baselines.naive import naive
-    from ..detect import rank_pairs
     from ..examples import interactions
-    from .judge import Judge, JudgeScene, JudgeSettings
+    from ..io import atomic_dir
 
     st = settings or EvalSettings()
     files = scene_files(scenes if isinstance(scenes, (list, tuple)) else [scenes])
@@ -148,9 +144,21 @@ def evaluate(scenes, out_dir, settings: EvalSettings | None = None, log=print) -
     for m in st.methods:
         if m not in METHODS:
             raise InputError(None, f"unknown method {m!r}; known: {', '.join(METHODS)}")
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
     icp_backend = resolve_backend("auto")
+    # every output is built in a temporary directory that replaces out_dir when complete
+    with atomic_dir(out_dir, "run.json") as out:
+        return _run(files, names, st, icp_backend, out, log)
+
+
+def _run(files, names, st, icp_backend, out, log) -> EvalResult:
+    import interaction_tensor as it
+    from ..baselines.bisector_icp import bisector_baseline
+    from ..baselines.common import capped_candidates
+    from ..baselines.naive import naive
+    from ..detect import rank_pairs
+    from ..examples import interactions
+    from .judge import Judge, JudgeScene, JudgeSettings
+
     res = EvalResult(settings={**asdict(st), "icp_backend": icp_backend,
                                "scenes": [f.name for f in files]})
     t_all = time.perf_counter()

@@ -220,28 +220,28 @@ def choose(rows: list, runs: list):
 def write(res: TuneResult, out_dir) -> None:
     """``tuning_pairs.csv`` (every judged pair), ``tuning.json`` (runs, curves, choice) and
     ``tuning.md`` (the chosen thresholds and their curves around them)."""
+    from ..io import atomic_dir
     from .runner import write_csv, write_json
 
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    write_csv(out / "tuning_pairs.csv", res.rows,
-              ["scene", "example", "affordance", "pair", "near_site", "score", "violations",
-               "clearance_points", "weight", "top", "valid", "reasons"])
-    write_json(out / "tuning.json", {"settings": res.settings, "chosen": res.chosen,
-                                     "runs": res.runs, "curves": res.curves})
-    lines = ["# S_aff per affordance, tuned on the procedural validation scenes", "",
-             "| affordance | S_aff | clearance limit | precision | recall | F1 | "
-             "runs with a valid accepted pair |", "|---|---|---|---|---|---|---|"]
-    for aff, ch in res.chosen.items():
-        t, lim = ch["threshold"], ch["clearance_limit"]
-        row = next(r for r in res.curves[aff] if r["threshold"] == t and r["limit"] == lim)
-        lines.append(f"| {aff} | {t:.3f} | {lim:.2f} | {100 * row['precision']:.1f} | "
-                     f"{100 * row['recall']:.1f} | {100 * row['f1']:.1f} | "
-                     f"{row['runs_with_a_valid_accepted']}/{row['runs_with_sites']} |")
-    lines += ["", "Top-5 poses judged valid per (scene, example):", ""]
-    for r in res.runs:
-        tops = [x for x in res.rows if x["scene"] == r["scene"] and x["example"] == r["example"]
-                and x["top"]]
-        lines.append(f"- {r['scene']} / {r['example']}: {sum(x['valid'] for x in tops)}/"
-                     f"{len(tops)} (sites of its kind: {r['sites']})")
-    (out / "tuning.md").write_text("\n".join(lines) + "\n")
+    with atomic_dir(out_dir, "tuning.json") as out:
+        write_csv(out / "tuning_pairs.csv", res.rows,
+                  ["scene", "example", "affordance", "pair", "near_site", "score", "violations",
+                   "clearance_points", "weight", "top", "valid", "reasons"])
+        write_json(out / "tuning.json", {"settings": res.settings, "chosen": res.chosen,
+                                         "runs": res.runs, "curves": res.curves})
+        lines = ["# S_aff per affordance, tuned on the procedural validation scenes", "",
+                 "| affordance | S_aff | clearance limit | precision | recall | F1 | "
+                 "runs with a valid accepted pair |", "|---|---|---|---|---|---|---|"]
+        for aff, ch in res.chosen.items():
+            t, lim = ch["threshold"], ch["clearance_limit"]
+            row = next(r for r in res.curves[aff] if r["threshold"] == t and r["limit"] == lim)
+            lines.append(f"| {aff} | {t:.3f} | {lim:.2f} | {100 * row['precision']:.1f} | "
+                         f"{100 * row['recall']:.1f} | {100 * row['f1']:.1f} | "
+                         f"{row['runs_with_a_valid_accepted']}/{row['runs_with_sites']} |")
+        lines += ["", "Top-5 poses judged valid per (scene, example):", ""]
+        for r in res.runs:
+            tops = [x for x in res.rows if x["scene"] == r["scene"]
+                    and x["example"] == r["example"] and x["top"]]
+            lines.append(f"- {r['scene']} / {r['example']}: {sum(x['valid'] for x in tops)}/"
+                         f"{len(tops)} (sites of its kind: {r['sites']})")
+        (out / "tuning.md").write_text("\n".join(lines) + "\n")

@@ -1,0 +1,161 @@
+"""Merge evaluation runs made on disjoint sets of scenes into one Table 1.
+
+``itensor evaluate`` on a long list of scenes can be split across processes or machines (one
+``--scenes`` subset each, same settings and seed); ``itensor evaluate-merge A B ... -o OUT``
+then reads each run's per-judgement records (``judgements.csv``, ``runs.csv``,
+``timings.csv``, ``judge_accuracy.csv``, ``run.json``) and writes the same files a single run
+would have written, pictures included. The merge refuses runs whose settings differ or whose
+scenes overlap, and builds its output in a temporary directory that replaces ``OUT`` only when
+complete.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+
+#: settings that may differ between the parts of one evaluation
+_PER_PART = {"scenes", "total_seconds"}
+
+_INT = {"rank", "candidates", "pairs", "accepted", "valid_n", "valid_right", "invalid_n",
+        "invalid_right"}
+_FLOAT = {"score", "x", "y", "z", "contact", "seconds", "judge_seconds", "valid_accuracy",
+          "mean_comparisons_per_decision",
+          "invalid_accuracy"}
+_BOOL = {"valid", "any_accepted"}
+
+
+def _value(key, text, path):
+    if text == "" or text is None:
+        return None
+    if key == "accepted" and text in ("True", "False"):
+        return text == "True"          # judgements.csv: accepted or not; runs.csv: a count
+    try:
+        if key in _BOOL:
+            if text not in ("True", "False"):
+                raise ValueError(text)
+            return text == "True"
+        if key in _INT:
+            return int(text)
+        if key in _FLOAT or key == "penetration_m":
+            return text if (key == "penetration_m" and text == "inf") else float(text)
+    except ValueError:
+        raise InputError(path, f"column {key!r} holds {text!r}, not a "
+                               f"{'boolean' if key in _BOOL else 'number'}") from None
+    return text
+
+
+def _rows(path: Path, required: tuple = ()) -> list[dict]:
+    if not path.is_file():
+        raise InputError(path, "missing: not the output directory of a finished "
+                               "`itensor evaluate`")
+    with open(path, newline="") as fh:
+        reader = csv.DictReader(fh)
+        missing = [c for c in required if c not in (reader.fieldnames or [])]
+        if missing:
+            raise InputError(path, f"missing column(s) {', '.join(missing)}")
+        rows = []
+        for r in reader:
+            if None in r:
+                raise InputError(path, f"line {reader.line_num} has more fields than the header")
+            rows.append({k: _value(k, v, path) for k, v in r.items()})
+    return rows
+
+
+def _judgement(row: dict, path: Path) -> dict:
+    if not isinstance(row["accepted"], bool):
+        raise InputError(path, f"column 'accepted' holds {row['accepted']!r}, not True/False")
+    nums = (row.pop("pose") or "").split()
+    if len(nums) != 16:
+        raise InputError(path, f"a pose with {len(nums)} numbers, not 16 "
+                               f"({row.get('scene')}, {row.get('example')})")
+    row["_pose"] = np.array([float(v) for v in nums]).reshape(4, 4)
+    row["reasons"] = row.get("reasons") or ""
+    return row
+
+
+def load_run(directory) -> "EvalResult":
+    """The records of one finished ``itensor evaluate`` run in ``directory``."""
+    from .runner import EvalResult
+
+    d = Path(directory)
+    if not d.is_dir():
+        raise InputError(d, "no such evaluation directory")
+    try:
+        info = json.loads((d / "run.json").read_text())
+        settings = dict(info["settings"])
+    except FileNotFoundError:
+        raise InputError(d / "run.json", "missing: not the output directory of a finished "
+                                         "`itensor evaluate`") from None
+    except (ValueError, KeyError, TypeError) as e:
+        raise InputError(d / "run.json", f"not an evaluation record ({e})") from None
+    path = d / "judgements.csv"
+    judg = [_judgement(r, path) for r in _rows(
+        path, ("scene", "example", "affordance", "method", "group", "rank", "score",
+               "accepted", "valid", "pose"))]
+    runs = _rows(d / "runs.csv", ("scene", "example", "affordance", "method", "any_accepted"))
+    timings = _rows(d / "timings.csv", ("stage", "method", "seconds"))
+    acc_path = d / "judge_accuracy.csv"
+    judge_acc = _rows(acc_path) if acc_path.is_file() else []
+    samp_path = d / "sampling_runs.csv"
+    sampling = _rows(samp_path) if samp_path.is_file() else []
+    for s in sampling:
+        for k in ("comparisons_to_accept_sum", "comparisons_to_accept_top20_sum",
+                  "accepted_top20"):
+            s[k] = int(s[k])
+    return EvalResult(judgements=judg, runs=runs, judge_accuracy=judge_acc, sampling=sampling,
+                      timings=timings, settings=settings)
+
+
+def merge(directories, out_dir, log=print) -> "EvalResult":
+    """Merge the runs in ``directories`` (disjoint scenes, equal settings) into ``out_dir``."""
+    from .report import write_all
+    from .runner import METHODS, EvalResult, metrics
+
+    dirs = [Path(p) for p in directories]
+    if len(dirs) < 2:
+        raise InputError(None, "give at least two evaluation directories to merge")
+    parts = [load_run(d) for d in dirs]
+    base = {k: v for k, v in parts[0].settings.items() if k not in _PER_PART}
+    seen: dict[str, Path] = {}
+    for d, p in zip(dirs, parts):
+        own = {k: v for k, v in p.settings.items() if k not in _PER_PART}
+        diff = sorted(k for k in set(base) | set(own) if base.get(k) != own.get(k))
+        if diff:
+            raise InputError(d, f"settings differ from {dirs[0]}: {', '.join(diff)}")
+        for s in p.settings.get("scenes", []):
+            if s in seen:
+                raise InputError(d, f"scene {s} is also in {seen[s]}")
+            seen[s] = d
+    res = EvalResult(settings={**parts[0].settings,
+                               "scenes": [s for p in parts for s in p.settings["scenes"]],
+                               # the parts ran side by side: the longest is the wall time
+                               "total_seconds": max(p.settings.get("total_seconds") or 0
+                                                    for p in parts),
+                               "merged_from": [str(d) for d in dirs]})
+    for p in parts:
+        res.judgements += p.judgements
+        res.runs += p.runs
+        res.sampling += p.sampling
+        res.timings += [t for t in p.timings if t["stage"] != "train" or p is parts[0]]
+    res.judge_accuracy = parts[0].judge_accuracy
+    methods = tuple(m for m in METHODS if m in set(base.get("methods") or METHODS))
+    res.table = metrics(res.judgements, methods, res.runs)
+
+    from ..io import atomic_dir
+
+    with atomic_dir(out_dir, "run.json") as tmp:
+        write_all(res, tmp)
+        for d in dirs:
+            for png in sorted((d / "pictures").glob("*.png")):
+                (tmp / "pictures").mkdir(exist_ok=True)
+                shutil.copy2(png, tmp / "pictures" / png.name)
+    log(f"merged {len(dirs)} runs ({len(res.settings['scenes'])} scenes, "
+        f"{len(res.judgements)} judgements) into {out_dir}")
+    return res
