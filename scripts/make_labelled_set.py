@@ -1,11 +1,13 @@
 """Regenerate the labelled pose set that proves the judge.
 
     python scripts/make_labelled_set.py [--objects ../shared/data/objects] [-o FILE]
+    python scripts/make_labelled_set.py --summary docs/results/labelled_set.md
 
 Writes ``src/interaction_tensor/evaluation/data/labelled_poses.json`` (by default): every
 validation scene's sites turned into valid poses and hard negatives for the five affordances'
 examples (:mod:`interaction_tensor.evaluation.labelled`), plus the hand-posed cases in the
-published scenes. Deterministic: the same code and data give the same file.
+published scenes. Deterministic: the same code and data give the same file. ``--summary``
+judges the committed set instead and writes its case-by-case summary (Markdown).
 """
 
 from __future__ import annotations
@@ -24,8 +26,23 @@ def main() -> int:
     ap.add_argument("--objects", default=str(ROOT.parent / "shared" / "data" / "objects"),
                     help="directory of the real query objects (default ../shared/data/objects)")
     ap.add_argument("-o", "--output", default=str(labelled.DATA_FILE))
+    ap.add_argument("--summary", default=None,
+                    help="judge the committed set and write its summary here instead")
     args = ap.parse_args()
     objects = Path(args.objects)
+    if args.summary:
+        from interaction_tensor.evaluation.report import judge_markdown
+
+        rows, verdicts = labelled.judge_accuracy(labelled.load(), str(objects), objects.parent)
+        Path(args.summary).write_text(
+            "# The labelled pose set that proves the judge\n\n"
+            "Made by `python scripts/make_labelled_set.py` "
+            "(`src/interaction_tensor/evaluation/data/labelled_poses.json`); "
+            "this summary by `python scripts/make_labelled_set.py --summary "
+            f"{args.summary}`.\n\n" + judge_markdown(rows) + "\n\n"
+            + labelled.summary_markdown(verdicts) + "\n")
+        print(f"wrote {args.summary}")
+        return 0
     poses = labelled.generate(str(objects), shared_dir=objects.parent)
     labelled.save(poses, args.output, meta={"objects": "shared/data/objects",
                                             "generator": "scripts/make_labelled_set.py"})

@@ -63,3 +63,19 @@ def test_a_tampered_file_is_refused(tmp_path):
 
     with pytest.raises(InputError, match="labelled-poses"):
         labelled.load(bad)
+
+
+def test_summary_counts_cases_and_judge_errors():
+    from types import SimpleNamespace
+
+    from interaction_tensor.evaluation.labelled import LabelledPose, summary_markdown
+
+    def pose(valid, case, scene="validation:living_a"):
+        return LabelledPose("sitting", "sitting-human", scene, [[1.0]], valid, case, "")
+    verdicts = [(pose(True, "seat"), SimpleNamespace(valid=True)),
+                (pose(True, "seat", "shared:scenes/living-room2.ply"),
+                 SimpleNamespace(valid=False)),
+                (pose(False, "sunk"), SimpleNamespace(valid=False))]
+    md = summary_markdown(verdicts).splitlines()
+    assert md[2] == "| sitting | valid | seat | 2 | 1 | living_a, scenes/living-room2.ply |"
+    assert md[3] == "| sitting | invalid | sunk | 1 | 1 | living_a |"

@@ -346,3 +346,25 @@ def judge_accuracy(poses: list, objects_dir=None, shared_dir=None, log=None):
                      "valid_accuracy": 100.0 * vr / len(pos) if pos else float("nan"),
                      "invalid_accuracy": 100.0 * ir / len(neg) if neg else float("nan")})
     return rows, verdicts
+
+
+def summary_markdown(verdicts: list) -> str:
+    """The labelled set case by case, with how many of each the judge got right
+    (``verdicts`` from :func:`judge_accuracy`)."""
+    from collections import defaultdict
+
+    cases = defaultdict(lambda: [0, 0])
+    scenes = defaultdict(set)
+    for p, v in verdicts:
+        c = cases[(p.affordance, p.valid, p.case)]
+        c[0] += 1
+        c[1] += int(bool(v.valid) == p.valid)
+        scenes[(p.affordance, p.valid, p.case)].add(p.scene.split(":", 1)[1])
+    lines = ["| affordance | label | case | poses | judged right | scenes |",
+             "|---|---|---|---:|---:|---|"]
+    order = {a: i for i, a in enumerate(("placing", "sitting", "filling", "riding", "hanging"))}
+    for key in sorted(cases, key=lambda k: (order.get(k[0], 9), not k[1], k[2])):
+        n, right = cases[key]
+        lines.append(f"| {key[0]} | {'valid' if key[1] else 'invalid'} | {key[2]} | {n} | "
+                     f"{right} | {', '.join(sorted(scenes[key]))} |")
+    return "\n".join(lines)
