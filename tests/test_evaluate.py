@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import csv
 
+import numpy as np
+
 import pytest
 
 from interaction_tensor.evaluation.runner import METHODS, metrics
@@ -86,6 +88,19 @@ def test_evaluate_merge_equals_one_run(tmp_path, capsys):
         assert (out / name).read_text() == (tmp_path / "ab" / name).read_text(), name
     assert sorted(p.name for p in (out / "pictures").glob("*.png")) == sorted(
         p.name for p in (tmp_path / "ab" / "pictures").glob("*.png"))
+
+    # the pictures drawn again from the recorded poses: the same pictures
+    from PIL import Image
+
+    from interaction_tensor.evaluation.pictures import redraw
+
+    for p in (out / "pictures").glob("*.png"):
+        p.unlink()
+    assert redraw(out, s1.parent, log=lambda _s: None) == 2
+    for p in (tmp_path / "ab" / "pictures").glob("*.png"):
+        a = np.asarray(Image.open(p), float)
+        b = np.asarray(Image.open(out / "pictures" / p.name), float)
+        assert a.shape == b.shape and np.abs(a - b).mean() < 1.0, p.name
 
     # refused: the same scene twice, other settings, a damaged record; the output untouched
     before = (out / "table1.csv").read_text()

@@ -1,7 +1,8 @@
 """Close-up pictures of judged poses: what a person checks a number against.
 
-One panel per pose: the scene cut to a box around the posed query object (so that walls and
-furniture in front do not hide it), seen from the side that shows most of the object, the
+One panel per pose: the scene cut to a box around the posed query object, seen from the side
+that shows most of the object; when no side shows half of it, everything more than ``cut``
+(5 cm) nearer to the camera than the object is clipped away (a cabinet front or a wall), the
 object drawn green when the judge found it valid and red when not, with its rank, score and
 the judge's first reason. Drawn with the project's software renderer (:mod:`..viz.raster`):
 no display or OpenGL needed.
@@ -32,7 +33,7 @@ def _samples(geometry, spacing: float, seed: int = 0, limit: int = 2_500_000):
 
 def closeup(scene_points, scene_normals, query_points, query_normals, pose, colour,
             margin: float | None = None, size=PANEL, azimuths=(210, 300, 30, 120),
-            elevation: float = 22.0, spacing: float = 0.01) -> np.ndarray:
+            elevation: float = 22.0, spacing: float = 0.01, cut: float = 0.05) -> np.ndarray:
     """(H, W, 3) uint8: the posed query object and the scene within ``margin`` (m; default
     the object's size, at least 0.3 m, and 0.4 m above it: a tap over a mug) of it."""
     from ..viz.raster import Canvas, frame_points
@@ -47,16 +48,30 @@ def closeup(scene_points, scene_normals, query_points, query_normals, pose, colo
     keep = np.all((scene_points >= lo) & (scene_points <= hi), axis=1)
     sp, sn = scene_points[keep], scene_normals[keep]
     frame = np.vstack([q, [lo, hi]])
-    best, best_cam = -1, None
-    for az in azimuths:               # the view that sees most of the object
-        cam = frame_points(frame, az, elevation, 120, 100)
-        cv = Canvas(cam, supersample=1)
-        cv.points(sp, (0, 0, 0), size=spacing, lit=False)
-        seen = int(cv.visible(q[:: max(1, len(q) // 400)], 0.02).sum())
-        if seen > best:
-            best, best_cam = seen, az
-    cam = frame_points(frame, best_cam, elevation, *size)
-    cv = Canvas(cam, supersample=2)
+
+    sub = q[:: max(1, len(q) // 400)]
+
+    def camera(az, w, h, cut_away):
+        cam = frame_points(frame, az, elevation, w, h)
+        if cut_away:
+            cam.near = max(cam.near, float(cam.project(q)[2].min()) - cut)
+        return cam
+
+    def best_view(cut_away):            # the view that sees most of the object
+        seen = []
+        for az in azimuths:
+            cv = Canvas(camera(az, 120, 100, cut_away), supersample=1)
+            cv.points(sp, (0, 0, 0), size=spacing, lit=False)
+            seen.append(int(cv.visible(sub, 0.02).sum()))
+        i = int(np.argmax(seen))
+        return azimuths[i], seen[i] / len(sub)
+
+    # the whole scene when some view shows at least half of the object, else the cut-away
+    best_az, frac = best_view(False)
+    cut_away = frac < 0.5
+    if cut_away:
+        best_az, _ = best_view(True)
+    cv = Canvas(camera(best_az, *size, cut_away), supersample=2)
     cv.points(sp, SCENE, sn, size=spacing * 1.6)
     qs = float(np.sqrt(np.ptp(q, axis=0).prod() ** (2 / 3) / max(len(q), 1)) * 1.6)
     cv.points(q, colour, qn, size=max(qs, 0.004))
@@ -95,3 +110,50 @@ def sheet(path, scene_geometry, query_geometry, poses, valid, captions, title: s
     with atomic_path(path) as tmp:
         img.save(tmp, format="PNG", optimize=True)
     return path
+
+
+def run_sheet(path, scene_geometry, query_geometry, rows: list, example: str, scene: str,
+              method: str = "iT-weighted") -> Path:
+    """The picture of one (example, scene) run: its judged top poses (``rows`` of the
+    evaluation's judgements, each with ``_pose``, ``rank``, ``score``, ``accepted``, ``valid``
+    and ``reasons``)."""
+    return sheet(path, scene_geometry, query_geometry, [r["_pose"] for r in rows],
+                 [r["valid"] for r in rows],
+                 [f"#{r['rank']} score {r['score']:.3f} "
+                  f"{'accepted' if r['accepted'] else 'rejected'}\n"
+                  + ("valid" if r["valid"] else "invalid: " + r["reasons"]) for r in rows],
+                 f"{example} in {scene}: {method} top {len(rows)} "
+                 "(green: judged valid, red: invalid)")
+
+
+def redraw(eval_dir, scenes_dir, objects_dir=None, method: str = "iT-weighted",
+           log=print) -> int:
+    """Draw ``eval_dir/pictures/`` again from the poses in its ``judgements.csv`` (for runs
+    made before a change to these pictures, or merged from several machines); returns the
+    number of pictures drawn."""
+    from ..examples import interactions
+    from ..io import load_geometry
+    from .merge import load_run
+
+    res = load_run(eval_dir)
+    objects_dir = objects_dir or res.settings.get("objects_dir")
+    runs: dict = {}
+    for r in res.judgements:
+        if r["method"] == method and r["group"] == "top":
+            runs.setdefault((r["scene"], r["example"]), []).append(r)
+    queries: dict = {}
+    count = 0
+    for scene in sorted({s for s, _ in runs}):
+        geom = load_geometry(Path(scenes_dir) / f"{scene}.ply")
+        for (s, example), rows in sorted(runs.items()):
+            if s != scene:
+                continue
+            if example not in queries:
+                queries[example] = interactions.build(example, objects_dir,
+                                                      res.settings.get("seed", 0)).query
+            rows = sorted(rows, key=lambda r: r["rank"])
+            run_sheet(Path(eval_dir) / "pictures" / f"{example}__{scene}.png", geom,
+                      queries[example], rows, example, scene, method)
+            count += 1
+        log(f"drew {scene}")
+    return count

@@ -273,16 +273,10 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                                     "pairs": int(len(acc)), "accepted": int(acc.sum()),
                                     "judge_seconds": round(time.perf_counter() - t2, 3)})
                 if st.pictures and m == "iT-weighted":
-                    from .pictures import sheet
+                    from .pictures import run_sheet
 
-                    sheet(out / "pictures" / f"{n}__{f.stem}.png", geom, ex.query,
-                          [r["_pose"] for r in shown], [r["valid"] for r in shown],
-                          [f"#{r['rank']} score {r['score']:.3f} "
-                           f"{'accepted' if r['accepted'] else 'rejected'}\n"
-                           + ("valid" if r["valid"] else "invalid: " + r["reasons"])
-                           for r in shown],
-                          f"{n} in {f.stem}: iT-weighted top {len(shown)} "
-                          "(green: judged valid, red: invalid)")
+                    run_sheet(out / "pictures" / f"{n}__{f.stem}.png", geom, ex.query, shown,
+                              n, f.stem, m)
             done = [r for r in res.judgements if r["scene"] == f.stem and r["example"] == n]
             summary = ", ".join(
                 f"{m} {sum(r['valid'] for r in done if r['method'] == m and r['group'] == 'top')}/"
