@@ -50,9 +50,14 @@ def test_evaluate_smoke_on_two_scenes(tmp_path):
     assert acc["iT-weighted"] > acc["Naive"]
     assert f1["iT-weighted"] > f1["Naive"]
     for name in ("table1.md", "sampling.csv", "sampling.md", "sampling.png", "timings.md",
-                 "judgements.csv", "run.json", "judge_accuracy.csv", "runs.csv"):
+                 "judgements.csv", "run.json", "judge_accuracy.csv", "runs.csv",
+                 "scenes_accepting.csv"):
         assert (out / name).stat().st_size > 0
     assert len(list((out / "pictures").glob("*.png"))) == 2
+    with open(out / "scenes_accepting.csv") as fh:
+        scenes = {r["method"]: r for r in csv.DictReader(fh)}
+    assert scenes["iT-weighted"]["scenes"] == "2"
+    assert 0 <= int(scenes["iT-weighted"]["scenes_accepting"]) <= 2
     with open(out / "judgements.csv") as fh:
         judged = list(csv.DictReader(fh))
     # scenes x methods x (top 5 + bottom 5); BS's 3 candidates may give fewer places

@@ -69,6 +69,23 @@ def violations(points: np.ndarray, orient: np.ndarray, offsets: np.ndarray,
     return out
 
 
+def count_violations(points: np.ndarray, orient: np.ndarray, offsets: np.ndarray,
+                     radius: np.ndarray, tolerance: float, scene, grid=None) -> np.ndarray:
+    """:func:`violations` of placements in ``scene``: on the Numba grid (``grid``, exact
+    ball-emptiness tests, ``_numba_clearance``) when one is given, else with the scene's
+    cKDTree (the reference). Returns (P,) int64."""
+    if grid is None:
+        return violations(points, orient, offsets, radius, tolerance,
+                          nearest_distance_function(scene, None, float(np.max(radius, initial=0))))
+    from . import _numba_clearance
+
+    need = np.asarray(radius, float) - tolerance
+    active = np.flatnonzero(need > 0)
+    if len(active) == 0 or len(points) == 0:
+        return np.zeros(len(points), np.int64)
+    return _numba_clearance.counts(points, orient, offsets[:, active], need[active], grid)
+
+
 def nearest_distance_function(scene, grid=None, bound: float | None = None):
     """A ``nearest_distance`` for :func:`violations`: the distance (m) to the nearest scene
     sample, or ``inf`` beyond ``bound`` (the test only asks whether a sample is nearer than

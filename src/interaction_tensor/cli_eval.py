@@ -95,13 +95,16 @@ def cmd_evaluate(args) -> int:
                       test_points=args.test_points, sample_fraction=args.sample_fraction,
                       max_candidates=args.max_candidates,
                       max_bs_candidates=args.max_bs_candidates, methods=methods,
-                      pictures=not args.no_pictures, seed=args.seed, spacing=args.spacing)
+                      pictures=not args.no_pictures, seed=args.seed, spacing=args.spacing,
+                      judge_check=not args.no_judge_check)
     log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
     res = evaluate(list(args.scenes), args.output, st, log)
     if not args.quiet:
-        from .evaluation.report import table_markdown
+        from .evaluation.report import judge_markdown, table_markdown
 
         print(table_markdown(res.table, methods))
+        if res.judge_accuracy:
+            print("\nThe judge on its labelled poses:\n" + judge_markdown(res.judge_accuracy))
         print(f"wrote {args.output}/table1.md, table1.csv, sampling.md/.csv/.png, timings.md, "
               f"judgements.csv, pictures/ in {res.settings['total_seconds']} s")
     return 0
@@ -126,12 +129,14 @@ def cmd_tune(args) -> int:
 
 def cmd_evaluate_merge(args) -> int:
     from .evaluation.merge import merge
-    from .evaluation.report import table_markdown
+    from .evaluation.report import judge_markdown, table_markdown
 
     log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
     res = merge(args.runs, args.output, log)
     if not args.quiet:
         print(table_markdown(res.table, tuple(res.settings.get("methods") or ())))
+        if res.judge_accuracy:
+            print("\nThe judge on its labelled poses:\n" + judge_markdown(res.judge_accuracy))
     return 0
 
 
@@ -182,6 +187,9 @@ def register(sub) -> None:
                    help="candidates scored by the BS baseline per (example, scene) (default 12)")
     p.add_argument("--spacing", type=float, default=0.01, help="sampling spacing (m)")
     p.add_argument("--no-pictures", action="store_true")
+    p.add_argument("--no-judge-check", action="store_true",
+                   help="skip judging the labelled poses (e.g. in all but one of the runs "
+                        "that `itensor evaluate-merge` will combine)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("-q", "--quiet", action="store_true")
     p.set_defaults(func=cmd_evaluate)

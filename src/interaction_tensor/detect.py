@@ -242,7 +242,7 @@ def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_or
     """Apply the clearance test to the pairs the score accepted (in place on
     ``pairs.accepted``). Returns (score_accepted (P,) bool, violations (P,) int, -1 where not
     tested)."""
-    from .clearance import clearance_offsets, nearest_distance_function, violations
+    from .clearance import clearance_offsets, count_violations
 
     score_acc = pairs.accepted.copy()
     viol = np.full(len(pairs.accepted), -1, np.int64)
@@ -250,12 +250,10 @@ def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_or
     if not settings.clearance or k == 0:
         return score_acc, viol
     idx = np.flatnonzero(score_acc)
-    tol = settings.clearance_tolerance
-    viol[idx] = violations(scene.points[pair_point[idx]], pair_orient[idx],
-                           clearance_offsets(tensor, settings.n_orientations),
-                           tensor.clearance_radius, tol,
-                           nearest_distance_function(scene, grid,
-                                                     float(tensor.clearance_radius.max())))
+    viol[idx] = count_violations(scene.points[pair_point[idx]], pair_orient[idx],
+                                 clearance_offsets(tensor, settings.n_orientations),
+                                 tensor.clearance_radius, settings.clearance_tolerance, scene,
+                                 grid)
     pairs.accepted[idx[viol[idx] > clearance_limit(tensor, settings) * k]] = False
     return score_acc, viol
 
@@ -394,19 +392,17 @@ def full_scores(det: Detection, idx: np.ndarray):
     ok = np.ones(len(idx), bool)
     k = len(det.tensor.clearance_points)
     if st.clearance and k:
-        from .clearance import clearance_offsets, nearest_distance_function, violations
+        from .clearance import clearance_offsets, count_violations
 
         viol = det.clearance_violations[idx].copy()
         todo = viol < 0
         if todo.any():
-            tol = st.clearance_tolerance
             grid = det.scene.grid() if resolve_backend(st.backend) == "numba" else None
-            viol[todo] = violations(det.scene.points[det.pair_point[idx[todo]]],
-                                    det.pair_orientation[idx[todo]],
-                                    clearance_offsets(det.tensor, st.n_orientations),
-                                    det.tensor.clearance_radius, tol,
-                                    nearest_distance_function(
-                                        det.scene, grid, float(det.tensor.clearance_radius.max())))
+            viol[todo] = count_violations(det.scene.points[det.pair_point[idx[todo]]],
+                                          det.pair_orientation[idx[todo]],
+                                          clearance_offsets(det.tensor, st.n_orientations),
+                                          det.tensor.clearance_radius, st.clearance_tolerance,
+                                          det.scene, grid)
         ok = viol <= clearance_limit(det.tensor, st) * k
     return scores, ok
 

@@ -20,8 +20,9 @@ import numpy as np
 
 from ..errors import InputError
 
-#: settings that may differ between the parts of one evaluation
-_PER_PART = {"scenes", "total_seconds"}
+#: settings that may differ between the parts of one evaluation (the judge's labelled-set
+#: check need run in one part only)
+_PER_PART = {"scenes", "total_seconds", "judge_check"}
 
 _INT = {"rank", "candidates", "pairs", "accepted", "valid_n", "valid_right", "invalid_n",
         "invalid_right"}
@@ -144,7 +145,7 @@ def merge(directories, out_dir, log=print) -> "EvalResult":
         res.runs += p.runs
         res.sampling += p.sampling
         res.timings += [t for t in p.timings if t["stage"] != "train" or p is parts[0]]
-    res.judge_accuracy = parts[0].judge_accuracy
+    res.judge_accuracy = next((p.judge_accuracy for p in parts if p.judge_accuracy), [])
     methods = tuple(m for m in METHODS if m in set(base.get("methods") or METHODS))
     res.table = metrics(res.judgements, methods, res.runs)
 

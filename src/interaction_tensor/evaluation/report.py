@@ -45,6 +45,35 @@ def table_markdown(rows: list[dict], methods=METHODS) -> str:
     return "\n".join(lines)
 
 
+def scene_rows(runs: list[dict], methods=METHODS) -> list[dict]:
+    """Per affordance and method: the scenes where any of the affordance's examples accepted a
+    prediction (``scenes_accepting``) out of the scenes run (``scenes``)."""
+    out = []
+    for a in AFFORDANCES:
+        for m in methods:
+            rr = [r for r in runs if r["affordance"] == a and r["method"] == m]
+            if rr:
+                out.append({"affordance": a, "method": m,
+                            "scenes": len({r["scene"] for r in rr}),
+                            "scenes_accepting": len({r["scene"] for r in rr
+                                                     if r["any_accepted"]})})
+    return out
+
+
+def scenes_markdown(rows: list[dict]) -> str:
+    methods = [m for m in METHODS if any(r["method"] == m for r in rows)]
+    lines = ["| affordance | " + " | ".join(methods) + " |",
+             "|---|" + "---:|" * len(methods)]
+    for a in AFFORDANCES:
+        cells = []
+        for m in methods:
+            r = next((r for r in rows if r["affordance"] == a and r["method"] == m), None)
+            cells.append(f"{r['scenes_accepting']}/{r['scenes']}" if r else "")
+        if any(cells):
+            lines.append(f"| {a} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def judge_markdown(rows: list[dict]) -> str:
     """The judge's accuracy on the labelled set, per affordance and class."""
     lines = ["| affordance | valid poses judged valid | invalid poses judged invalid |",
@@ -99,6 +128,9 @@ def write_all(res, out: Path) -> None:
     write_csv(out / "judge_accuracy.csv", res.judge_accuracy,
               ["affordance", "valid_n", "valid_right", "valid_accuracy", "invalid_n",
                "invalid_right", "invalid_accuracy"])
+    scenes = scene_rows(res.runs)
+    write_csv(out / "scenes_accepting.csv", scenes,
+              ["affordance", "method", "scenes_accepting", "scenes"])
     write_csv(out / "runs.csv", res.runs,
               ["scene", "example", "affordance", "method", "candidates", "pairs", "accepted",
                "any_accepted"])
@@ -161,7 +193,10 @@ def write_all(res, out: Path) -> None:
         "# Wall time per method\n\n" + "\n".join(tl) +
         f"\n\nTraining (8 descriptors and judges): {train:.1f} s; scene preparation "
         f"(detector sampling + judge sampling): {prep:.1f} s; whole run: "
-        f"{res.settings.get('total_seconds')} s on {machine()}. Naive and BS score a capped "
+        f"{res.settings.get('total_seconds')} s"
+        + (f" (the longest of {len(res.settings['merged_from'])} runs made side by side on "
+           "disjoint scenes and merged)" if res.settings.get("merged_from") else "")
+        + f" on {machine()}. Naive and BS score a capped "
         "subset of the candidates (see run.json), so compare pairs per second.\n")
 
     md = ["# Table 1 (reproduced): validity of the top and bottom predictions, judged "
@@ -169,7 +204,9 @@ def write_all(res, out: Path) -> None:
           "Precision of the top 5, accuracy and F-score over the top and bottom 5, in %, per "
           "affordance, and the (scene, example) runs that accepted any prediction "
           "(definitions in `interaction_tensor/evaluation/runner.py`).\n", table_markdown(rows),
-          "", "## The judge on the labelled set\n", judge_markdown(res.judge_accuracy), "",
+          "", "## Scenes where the affordance accepted any prediction (any of its examples)\n",
+          scenes_markdown(scenes), "",
+          "## The judge on the labelled set\n", judge_markdown(res.judge_accuracy), "",
           "## The paper's Table 1 (human markers)\n", paper_markdown(), ""]
     (out / "table1.md").write_text("\n".join(md) + "\n")
     write_json(out / "run.json", {"settings": res.settings, "machine": machine()})
