@@ -262,18 +262,7 @@ def _lattice_nearest(cand, m, lx, ly, lz, h, lattice, pts, out):
             qy = ly + ib * stp
             for ic in range(lattice + 1):
                 qz = lz + ic * stp
-                best = np.inf
-                bi = cand[0]
-                for u in range(m):
-                    p = cand[u]
-                    dx = pts[p, 0] - qx
-                    dy = pts[p, 1] - qy
-                    dz = pts[p, 2] - qz
-                    d2 = dx * dx + dy * dy + dz * dz
-                    if d2 < best:
-                        best = d2
-                        bi = p
-                out[t] = bi
+                out[t] = _scan_list(qx, qy, qz, cand, 0, m, pts)
                 t += 1
 
 
