@@ -9,6 +9,8 @@ import sys
 import numpy as np
 import pytest
 
+import interaction_tensor as it
+
 from interaction_tensor.io import write_mesh, write_ply_points
 
 from conftest import corner_example
@@ -65,7 +67,8 @@ def test_train_info_detect(files, descriptor):
     assert doc["stats"]["mean_comparisons_to_accept"] <= 512
     assert (out / "heatmap.ply").stat().st_size > 0
     header = (out / "heatmap.ply").read_bytes()[:400].decode("ascii", "replace")
-    assert "property float score" in header and "property uchar red" in header
+    assert "property float quality" in header and "property float scalar_score" in header
+    assert "property uchar red" in header and (out / "predictions.glb").stat().st_size > 0
     tops = sorted((out / "top").glob("top_*.ply"))
     assert len(tops) == len(doc["predictions"])
     # no temporary files left behind
@@ -133,3 +136,81 @@ def test_detect_on_an_rgbd_frame_directory(files, descriptor, tmp_path):
     _one_line_error(run("detect", descriptor, "-o", tmp_path / "x",
                         "--depth", frame / "color.png", "--intrinsics", frame / "intrinsics.json"),
                     "color.png")
+
+
+# ----------------------------------------------------------------------------- polish
+def _all_actions():
+    import argparse
+
+    from interaction_tensor.cli import build_parser
+
+    def walk(parser, name):
+        for a in parser._actions:
+            if isinstance(a, argparse._SubParsersAction):
+                for n, sp in a.choices.items():
+                    yield from walk(sp, f"{name} {n}")
+            elif not isinstance(a, (argparse._HelpAction, argparse._VersionAction)):
+                yield name, parser, a
+
+    yield from walk(build_parser(), "itensor")
+
+
+def test_every_option_has_help_and_shows_its_default():
+    actions = list(_all_actions())
+    assert len(actions) > 100
+    for name, parser, action in actions:
+        assert action.help, f"{name} {action.option_strings or action.dest} has no help"
+        default = action.default
+        if action.option_strings and default not in (None, False) and not isinstance(default, bool):
+            text = parser.formatter_class(prog="x")._get_help_string(action)
+            assert "default" in text.lower(), f"{name} {action.option_strings}: {text}"
+
+
+def test_detect_json_summary_and_unwritable_outputs(tmp_path, capsys):
+    from interaction_tensor.cli import main
+
+    from conftest import corner_example
+
+    query, scene_object = corner_example()
+    write_mesh(tmp_path / "q.ply", query.vertices, query.faces)
+    write_mesh(tmp_path / "s.ply", scene_object.vertices, scene_object.faces)
+    assert main(["train", str(tmp_path / "q.ply"), str(tmp_path / "s.ply"), "--affordance",
+                 "corner", "-o", str(tmp_path / "c.npz"), "--json"]) == 0
+    doc = json.loads(capsys.readouterr().out)
+    assert doc["affordance"] == "corner" and doc["descriptor"].endswith("c.npz")
+    assert main(["detect", str(tmp_path / "s.ply"), str(tmp_path / "c.npz"), "-o",
+                 str(tmp_path / "out"), "--json", "--sample-fraction", "0.2"]) == 0
+    out = capsys.readouterr().out.strip().splitlines()
+    assert len(out) == 1
+    summary = json.loads(out[0])
+    assert summary["pairs_scored"] > 0 and summary["output"] == str(tmp_path / "out")
+    assert len(summary["predictions"]) >= 1
+    # unwritable outputs: one line naming the path, status 2, no traceback
+    (tmp_path / "file").write_text("x")
+    for target in (str(tmp_path / "file" / "c.npz"), str(tmp_path / "out"), ""):
+        code = main(["train", str(tmp_path / "q.ply"), str(tmp_path / "s.ply"), "--affordance",
+                     "corner", "-o", target])
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, (target, err)
+    assert main(["detect", str(tmp_path / "s.ply"), str(tmp_path / "c.npz"), "-o", ""]) == 2
+    assert "output is empty" in capsys.readouterr().err
+
+
+def test_a_closed_pipe_ends_quietly(tmp_path):
+    """``itensor info --json X | head -c 10``: no traceback when the reader goes away."""
+    import subprocess
+    import sys
+
+    from conftest import corner_example
+
+    query, scene_object = corner_example()
+    t = it.InteractionTensor.fit(query, scene_object, "corner", it.TrainSettings(query_points=500))
+    t.save(tmp_path / "c.npz")
+    # the reader closes its end before itensor writes a byte: EPIPE on the first write
+    run = subprocess.Popen([sys.executable, "-m", "interaction_tensor.cli", "info", "--json",
+                            str(tmp_path / "c.npz")], stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True)
+    run.stdout.close()
+    err = run.stderr.read()
+    assert run.wait(timeout=120) == 141, err
+    assert "Traceback" not in err and "BrokenPipe" not in err and "Exception" not in err, err

@@ -28,7 +28,7 @@ def test_metrics_definitions():
 
 
 def test_evaluate_smoke_on_two_scenes(tmp_path):
-    from interaction_tensor.cli_eval import main
+    from interaction_tensor.cli import main
 
     s1 = shared_file("scenes/office-desk1.ply")
     s2 = shared_file("scenes/office-desk5.ply")
@@ -67,7 +67,7 @@ def test_evaluate_smoke_on_two_scenes(tmp_path):
 
 
 def test_evaluate_bad_input_is_one_line_error(tmp_path, capsys):
-    from interaction_tensor.cli_eval import main
+    from interaction_tensor.cli import main
 
     assert main(["evaluate", "--scenes", str(tmp_path / "none"), "-o", str(tmp_path)]) == 2
     assert main(["evaluate", "--scenes", str(tmp_path), "-o", str(tmp_path / "o")]) == 2
@@ -77,7 +77,7 @@ def test_evaluate_bad_input_is_one_line_error(tmp_path, capsys):
 
 def test_evaluate_merge_equals_one_run(tmp_path, capsys):
     """Runs on disjoint scene subsets merge into the table one run over all scenes gives."""
-    from interaction_tensor.cli_eval import main
+    from interaction_tensor.cli import main
 
     s1 = shared_file("scenes/office-desk1.ply")
     s2 = shared_file("scenes/office-desk5.ply")

@@ -173,7 +173,7 @@ def test_drop_onto_measures_the_vertical_gap():
 
 
 def test_cli_examples_list_and_build(tmp_path, capsys):
-    from interaction_tensor.cli_eval import main
+    from interaction_tensor.cli import main
 
     assert main(["examples", "list"]) == 0
     assert "riding-human" in capsys.readouterr().out

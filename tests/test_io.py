@@ -65,7 +65,7 @@ def test_errors_name_the_file_and_the_problem(tmp_path):
     empty.write_bytes(b"")
     with pytest.raises(it.InputError, match="empty"):
         load_geometry(empty)
-    unknown = tmp_path / "scene.xyz"
+    unknown = tmp_path / "scene.abc"
     unknown.write_text("1 2 3\n")
     with pytest.raises(it.InputError, match="unknown format"):
         load_geometry(unknown)

@@ -295,48 +295,47 @@ def test_no_align_and_units_warning():
 
 
 # ----------------------------------------------------------------------------- CLI glue
-def _detect_parser():
-    """A parser shaped like ``itensor detect``'s, with the real-data options added."""
-    from interaction_tensor.cli import _geometry_options
+def _detect_args(argv):
+    """``itensor detect`` arguments parsed by the real parser."""
+    from interaction_tensor.cli import build_parser
 
-    p = argparse.ArgumentParser(prog="itensor detect")
-    p.add_argument("scene", nargs="?", default=None)
-    p.add_argument("descriptor")
-    p.add_argument("--spacing", type=float, default=None)
-    p.add_argument("--seed", type=int, default=0)
-    _geometry_options(p)
-    rd.add_realdata_options(p)
-    return p
+    return build_parser().parse_args(["detect", *argv, "-o", "unused"])
+
+
+def _scene(argv):
+    from interaction_tensor.api import load_scene
+    from interaction_tensor.cli import scene_options
+
+    args = _detect_args(argv)
+    return load_scene(args.scene, SPACING, **scene_options(args))
 
 
 def test_cli_options_parse():
-    p = _detect_parser()
-    a = p.parse_args(["d.npz", "--depth", "x.png", "--intrinsics", "i.json",
+    from interaction_tensor.cli import scene_options
+
+    a = _detect_args(["d.npz", "--depth", "x.png", "--intrinsics", "i.json",
                       "--depth-scale", "5000", "--no-remove-outliers", "--up", "auto"])
     assert a.scene is None and a.descriptor == "d.npz" and a.depth == "x.png"
     assert a.remove_outliers is False and a.up == "auto" and a.depth_scale == 5000
-    a = p.parse_args(["room.ply", "d.npz", "--scan", "--up", "0,1,0", "--no-align"])
+    a = _detect_args(["room.ply", "d.npz", "--scan", "--up", "0,1,0", "--no-align"])
     assert a.scene == "room.ply" and a.up == (0.0, 1.0, 0.0) and a.no_align and a.scan
-    assert not rd.is_real_input(p.parse_args(["room.ply", "d.npz"]))
+    plain = scene_options(_detect_args(["room.ply", "d.npz"]))
+    assert "scan" not in plain and "depth" not in plain and "align" not in plain
 
 
 def test_scene_from_args_frame_dir_and_errors(tmp_path):
-    p = _detect_parser()
     frame = shared_file("rgbd/tum_desk/depth.png").parent
-    args = p.parse_args([str(frame), "d.npz", "--voxel-size", "0.05"])
-    scene, report, transform = rd.scene_from_args(args, SPACING)
-    assert report.kind == "rgbd" and report.alignment["kind"] == "floor"
-    assert report.steps[0]["step"] == "rgbd_back_projection"
-    assert np.allclose(transform, report.transform) and len(scene.points) > 1000
+    scene = _scene([str(frame), "d.npz", "--voxel-size", "0.05"])
+    report = scene.report
+    assert scene.captured and report.kind == "rgbd" and report.alignment["kind"] == "floor"
+    assert report.steps[0]["step"] == "rgbd_back_projection" and len(scene.points) > 1000
     # a bad intrinsics file given on the command line
     bad = _write_intrinsics(tmp_path / "bad.json", fx=_DROP)
-    args = p.parse_args(["d.npz", "--depth", str(frame / "depth.png"), "--intrinsics", str(bad)])
     with pytest.raises(InputError, match="bad.json"):
-        rd.scene_from_args(args, SPACING)
+        _scene(["d.npz", "--depth", str(frame / "depth.png"), "--intrinsics", str(bad)])
     # intrinsics for another image size
     other = _write_intrinsics(tmp_path / "other.json")
-    args = p.parse_args(["d.npz", "--depth", str(frame / "depth.png"), "--intrinsics", str(other)])
     with pytest.raises(InputError, match="depth.png.*640x480.*64x48"):
-        rd.scene_from_args(args, SPACING)
-    with pytest.raises(InputError, match="--intrinsics"):
-        rd.scene_from_args(p.parse_args(["d.npz", "--depth", "x.png"]), SPACING)
+        _scene(["d.npz", "--depth", str(frame / "depth.png"), "--intrinsics", str(other)])
+    with pytest.raises(InputError, match="intrinsics"):
+        _scene(["d.npz", "--depth", "x.png"])

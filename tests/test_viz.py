@@ -161,13 +161,6 @@ def test_cli_view_show_render(cli, outdir, tmp_path, capsys):
     assert "nowhere" in capsys.readouterr().err
 
 
-def test_render_after_detect(outdir, tmp_path):
-    from interaction_tensor.cli_viz import render_after_detect
-
-    shutil.copytree(outdir, tmp_path / "o")
-    assert render_after_detect(tmp_path / "o", quiet=True) == tmp_path / "o" / "render.png"
-
-
 # --------------------------------------------------------------------------- index.html
 def test_page_is_self_contained(outdir):
     from interaction_tensor.viz import write_viewer

@@ -9,50 +9,18 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import signal
 import sys
 import time
 from pathlib import Path
 
 from . import __version__
-from .errors import InputError, ItensorError
+from .errors import InputError, ItensorError, SettingsError
 
 
-# --------------------------------------------------------------------------- helpers
-def _vector(text: str) -> tuple:
-    named = {"up": (0.0, 0.0, 1.0), "down": (0.0, 0.0, -1.0)}
-    if text in named:
-        return named[text]
-    try:
-        values = tuple(float(v) for v in text.split(","))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected 'up', 'down' or x,y,z, got {text!r}") from None
-    if len(values) != 3:
-        raise argparse.ArgumentTypeError(f"expected three comma-separated numbers, got {text!r}")
-    return values
-
-
-def _fraction(text: str) -> float:
-    value = float(text)
-    if not 0 < value <= 1:
-        raise argparse.ArgumentTypeError(f"must be in (0, 1], got {text}")
-    return value
-
-
-def _show_progress(args) -> bool:
-    return not getattr(args, "quiet", False) and sys.stderr.isatty()
-
-
-def _say(args, *parts) -> None:
-    if not getattr(args, "quiet", False):
-        print(*parts)
-
-
-def _out_dir(path) -> Path:
-    path = Path(path)
-    if path.exists() and not path.is_dir():
-        raise InputError(path, "exists and is not a directory")
-    path.mkdir(parents=True, exist_ok=True)
-    return path
+from .cli_common import (Parser, _axis_or_vector, _fraction, _out_path, _say,  # noqa: F401
+                         _show_progress, _vector, quiet_option, seed_option)
 
 
 def _geometry_options(p: argparse.ArgumentParser) -> None:
@@ -61,25 +29,114 @@ def _geometry_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--up", choices=("z", "y"), default="z", help="the files' up axis")
 
 
+def detection_options(p) -> None:
+    """The options of :class:`DetectSettings` (``itensor detect`` and ``itensor batch``)."""
+    p.add_argument("--top-k", type=int, default=10, help="predictions kept after suppression")
+    p.add_argument("--sample-fraction", type=_fraction, default=0.30,
+                   help="fraction of scene points used as test points (the paper's 0.3)")
+    seed_option(p)
+    p.add_argument("--criterion", choices=("paper", "gaussian"), default=None,
+                   help="score criterion: paper (default for meshes and clouds) or gaussian "
+                        "(the authors' code; default for RGB-D frames and --scan)")
+    p.add_argument("--keypoints", choices=("weighted", "uniform"), default="weighted",
+                   help="keypoint set compared: weight-driven (paper) or uniform")
+    p.add_argument("--threshold", type=_fraction, default=None,
+                   help="acceptance threshold on the normalised score (default: calibrated)")
+    p.add_argument("--spacing", type=float, default=None,
+                   help="mesh sampling spacing in metres (default: the descriptor's)")
+    p.add_argument("--normal-tolerance", type=float, default=15.0,
+                   help="largest angle in degrees between a test normal and N_aff")
+    p.add_argument("--oriented-normals", action="store_true",
+                   help="trust the sign of scene normals (default: compare the normal line)")
+    p.add_argument("--nms-radius", type=float, default=None,
+                   help="suppression radius in metres (default: the query object's width)")
+    p.add_argument("--no-early-exit", action="store_true",
+                   help="compare every keypoint of every candidate")
+    p.add_argument("--no-clearance", action="store_true",
+                   help="accept on the score alone, without the clearance test")
+    p.add_argument("--backend", choices=("auto", "numba", "numpy", "torch"), default="auto",
+                   help="scoring backend; torch runs on a CUDA device when present "
+                        "(pip install 'interaction-tensor[torch]')")
+    p.add_argument("--device", default=None,
+                   help="torch device for --backend torch (default: cuda if present, else cpu)")
+    p.add_argument("--keypoint-order", choices=("weight", "adaptive"), default="weight",
+                   help="compare keypoints in weight order (paper) or those that fail most often "
+                        "first (adaptive: same decisions and accepted scores, fewer comparisons; "
+                        "rejected pairs keep another partial score)")
+
+
+# --------------------------------------------------------------------------- real scenes
+def real_scene_options(parser) -> None:
+    """Add the RGB-D / scan / alignment / cleaning options to the ``itensor detect`` parser.
+
+    If the parser already has ``--up`` (``choices=("z", "y")``, default ``z``), it is widened
+    to ``auto``, the other axes and x,y,z, with default ``auto``; otherwise ``--up`` is added
+    (default ``auto``). For a plain scene file (no --scan, not a frame) ``auto`` means ``z``,
+    the old default, so mesh scenes behave exactly as before.
+    """
+    g = parser.add_argument_group(
+        "real scenes (RGB-D frames, scans)",
+        "An RGB-D frame is given with --depth and --intrinsics (and --color), or as a directory "
+        "holding color.png, depth.png and intrinsics.json in place of SCENE. --scan treats a "
+        "scene file as a captured cloud. Both are cleaned and gravity-aligned.")
+    g.add_argument("--color", help="colour image registered to the depth image")
+    g.add_argument("--depth", help="depth image (single-channel 16-bit PNG)")
+    g.add_argument("--intrinsics", help="JSON with width, height, fx, fy, cx, cy "
+                                        "[, depth_scale, depth_trunc]")
+    g.add_argument("--depth-scale", type=float, default=None,
+                   help="depth units per metre (overrides the JSON; TUM 5000, mm PNG 1000)")
+    g.add_argument("--depth-trunc", type=float, default=None,
+                   help="ignore depth beyond this many metres (overrides the JSON)")
+    g.add_argument("--scan", action="store_true",
+                   help="SCENE is a captured point cloud (or scanned mesh): clean and align it")
+    g.add_argument("--no-align", action="store_true",
+                   help="skip gravity alignment (a frame's camera is then assumed level)")
+    g.add_argument("--max-tilt", type=float, default=None,
+                   help="largest angle (deg) between --up and the supporting plane's normal")
+    g.add_argument("--plane-distance", type=float, default=0.02,
+                   help="RANSAC inlier distance in metres (default 0.02)")
+    g.add_argument("--voxel-size", type=float, default=None,
+                   help="voxel down-sampling edge in metres (default: the descriptor's "
+                        "spacing; 0 = none)")
+    g.add_argument("--remove-outliers", action=argparse.BooleanOptionalAction, default=True,
+                   help="statistical outlier removal (default on)")
+    g.add_argument("--outlier-neighbors", type=int, default=20,
+                   help="neighbours of the statistical outlier removal")
+    g.add_argument("--outlier-std", type=float, default=2.0,
+                   help="standard deviations beyond which a point is an outlier")
+    g.add_argument("--orient-normals", choices=("camera", "up", "none"), default=None,
+                   help="normal orientation (default: camera for a frame, up for a scan)")
+    up_help = ("up direction of the input: auto (a frame: camera -Y; a scan: search every "
+               "direction), z, y, -y, ... or x,y,z")
+    existing = getattr(parser, "_option_string_actions", {}).get("--up")
+    if existing is not None:      # widen the detect parser's --up z|y (default z -> auto;
+        existing.choices = None   # a plain scene file still reads auto as z)
+        existing.type = _axis_or_vector
+        existing.default = "auto"
+        parser.set_defaults(up="auto")
+        existing.help = up_help
+    else:
+        g.add_argument("--up", type=_axis_or_vector, default="auto", help=up_help)
+
+
 # --------------------------------------------------------------------------- train
 def cmd_train(args) -> int:
-    from .descriptor import InteractionTensor
-    from .io import load_geometry
-    from .settings import TrainSettings
+    from .api import train
 
-    query = load_geometry(args.query, args.scale, args.up)
-    scene_object = load_geometry(args.scene_object, args.scale, args.up)
-    settings = TrainSettings(query_points=args.query_points, scene_spacing=args.spacing,
-                             affordance_normal=args.normal, seed=args.seed, vectors=args.vectors)
     t0 = time.perf_counter()
-    tensor = InteractionTensor.fit(query, scene_object, args.affordance, settings,
-                                   reference_point=args.reference_point)
-    if args.acceptance:
-        from .examples.interactions import acceptance
-
-        tensor.set_acceptance(*acceptance(args.acceptance))
+    tensor = train(args.query, args.scene_object, args.affordance, acceptance=args.acceptance,
+                   normal=args.normal, spacing=args.spacing, query_points=args.query_points,
+                   vectors=args.vectors, reference_point=args.reference_point, seed=args.seed,
+                   scale=args.scale, up=args.up)
     out = tensor.save(args.output)
-    _say(args, f"trained {tensor.affordance!r} in {time.perf_counter() - t0:.2f} s: "
+    seconds = time.perf_counter() - t0
+    if args.json:
+        print(json.dumps({"descriptor": str(out), "affordance": tensor.affordance,
+                          "seconds": round(seconds, 3), "threshold": tensor.threshold(),
+                          "bisector_points": len(tensor.bisector_points),
+                          "keypoints": len(tensor.weighted.points)}))
+        return 0
+    _say(args, f"trained {tensor.affordance!r} in {seconds:.2f} s: "
                f"{len(tensor.bisector_points)} bisector points, "
                f"{len(tensor.weighted.points)} keypoints, threshold "
                f"{tensor.threshold():.3f} -> {out}")
@@ -87,39 +144,55 @@ def cmd_train(args) -> int:
 
 
 # --------------------------------------------------------------------------- detect
+#: DetectSettings field -> ``itensor detect`` option (dest)
+_SETTING_OPTIONS = {
+    "sample_fraction": "sample_fraction", "top_k": "top_k", "seed": "seed",
+    "criterion": "criterion", "keypoints": "keypoints", "threshold": "threshold",
+    "scene_spacing": "spacing", "normal_tolerance_deg": "normal_tolerance",
+    "oriented_normals": "oriented_normals", "nms_radius": "nms_radius", "backend": "backend",
+    "device": "device", "keypoint_order": "keypoint_order"}
+
+
 def _detect_settings(args):
     from .settings import DetectSettings
 
-    return DetectSettings(
-        sample_fraction=args.sample_fraction, top_k=args.top_k, seed=args.seed,
-        criterion=args.criterion, keypoints=args.keypoints, threshold=args.threshold,
-        scene_spacing=args.spacing, early_exit=not args.no_early_exit,
-        normal_tolerance_deg=args.normal_tolerance, oriented_normals=args.oriented_normals,
-        nms_radius=args.nms_radius, backend=args.backend, device=args.device,
-        keypoint_order=args.keypoint_order, clearance=not args.no_clearance)
+    return DetectSettings(early_exit=not args.no_early_exit, clearance=not args.no_clearance,
+                          **{field: getattr(args, dest) for field, dest in _SETTING_OPTIONS.items()})
 
 
-def run_detection(scene_geometry, tensor, settings, outdir, progress, scene_name,
-                  descriptor_name):
-    """Prepare the scene, detect, export; returns the Detection (shared with the demo)."""
-    from .detect import detect
-    from .predictions import export
-    from .scene import prepare_scene
-
-    t0 = time.perf_counter()
-    spacing = settings.scene_spacing or tensor.scene_spacing
-    scene = prepare_scene(scene_geometry, spacing, settings.seed, settings.max_scene_points)
-    t_prep = time.perf_counter() - t0
-    result = detect(scene, tensor, settings, progress=progress)
-    result.stats["seconds"]["scene_preparation"] = round(t_prep, 4)
-    t1 = time.perf_counter()
-    export(result, outdir, scene_name, descriptor_name)
-    result.stats["seconds"]["export"] = round(time.perf_counter() - t1, 4)
-    return result
+def scene_options(args) -> dict:
+    """:func:`interaction_tensor.api.load_scene` keyword arguments from ``itensor detect``'s
+    options: a scene file, a frame directory, or --depth/--intrinsics[/--color]; --scan."""
+    frame = any(getattr(args, k, None) for k in ("color", "depth", "intrinsics"))
+    scene = getattr(args, "scene", None)
+    options = {"scale": args.scale, "up": args.up}
+    if frame:
+        options.update(color=args.color, depth=args.depth, intrinsics=args.intrinsics,
+                       depth_scale=args.depth_scale, depth_trunc=args.depth_trunc)
+    if args.scan:
+        options["scan"] = True
+    if frame or args.scan or (scene is not None and Path(scene).is_dir()):
+        if args.plane_distance is not None and not args.plane_distance > 0:
+            raise SettingsError("--plane-distance must be positive (metres)")
+        options.update(align=not args.no_align, max_tilt_deg=args.max_tilt,
+                       voxel_size=args.voxel_size, remove_outliers=args.remove_outliers,
+                       outlier_neighbors=args.outlier_neighbors, outlier_std=args.outlier_std,
+                       plane_distance=args.plane_distance,
+                       normals_orientation=args.orient_normals)
+    elif scene is None:
+        raise InputError(None, "give a scene file, an RGB-D frame directory, or --depth and "
+                               "--intrinsics (and --color)")
+    elif args.up not in ("auto", "z", "y"):
+        raise InputError(scene, f"--up {args.up} needs --scan (a plain scene file takes "
+                                "--up z or y)")
+    return options
 
 
 def _report(args, result, outdir) -> None:
     st = result.stats
+    if getattr(args, "json", False):
+        print(json.dumps(summary(result, outdir)))
+        return
     _say(args, f"scene: {st['scene_points']} points, {st['test_points_sampled']} test points, "
                f"{st['candidates_after_normal_filter']} after the normal filter")
     _say(args, f"scored {st['pairs_scored']} (point, orientation) pairs in "
@@ -134,61 +207,73 @@ def _report(args, result, outdir) -> None:
         x, y, z = p.position
         _say(args, f"  #{rank:<2d} score {p.score:.3f} at ({x:.3f}, {y:.3f}, {z:.3f}) m, "
                    f"orientation {p.orientation_index} ({p.angle * 180 / 3.141592653589793:.0f} deg)")
-    _say(args, f"wrote {outdir}/predictions.json, heatmap.ply, top/ ({len(result.predictions)} posed objects)")
+    _say(args, f"wrote {outdir}/predictions.json, heatmap.ply, predictions.glb, top/ "
+               f"({len(result.predictions)} posed objects)")
+
+
+def summary(result, outdir) -> dict:
+    """The ``--json`` summary of one detection: counts, seconds, the top predictions."""
+    st = result.stats
+    return {"output": str(outdir), "scene": result.scene.source,
+            "affordance": result.tensor.affordance, "threshold": result.threshold,
+            "scene_points": st["scene_points"], "test_points_sampled": st["test_points_sampled"],
+            "candidates": st["candidates_after_normal_filter"],
+            "pairs_scored": st["pairs_scored"], "pairs_accepted": st["pairs_accepted"],
+            "seconds": st["seconds"],
+            "predictions": [{"score": p.score, "position": p.position.tolist(),
+                             "angle": p.angle} for p in result.predictions]}
 
 
 def cmd_detect(args) -> int:
-    from .descriptor import InteractionTensor
-    from .detect import detect
-    from .io import load_geometry
-    from .predictions import export
-    from .realdata import is_real_input, scene_from_args, write_input_frame_outputs
+    from .api import detect, load_tensor
 
-    tensor = InteractionTensor.load(args.descriptor)
-    real = is_real_input(args)
-    if args.criterion is None:
-        # captured depth is too noisy for the paper criterion's tight tests on short vectors
-        # (README, "Your own RGB-D data"); the authors' own code criterion copes with it
-        args.criterion = "gaussian" if real else "paper"
-    settings = _detect_settings(args)
-    if not real:
-        if args.scene is None:
-            raise InputError(None, "give a scene file, an RGB-D frame directory, or "
-                                   "--depth and --intrinsics")
-        up = "z" if args.up == "auto" else args.up
-        if up not in ("z", "y"):
-            raise InputError(args.scene, f"--up {args.up} needs --scan for a scene file; "
-                                         "use z or y")
-        scene_geometry = load_geometry(args.scene, args.scale, up)
-        outdir = _out_dir(args.output)
-        result = run_detection(scene_geometry, tensor, settings, outdir, _show_progress(args),
-                               str(args.scene), str(args.descriptor))
-    else:
-        outdir = _out_dir(args.output)
-        t0 = time.perf_counter()
-        scene, report, transform = scene_from_args(args, tensor.scene_spacing)
-        t_prep = time.perf_counter() - t0
+    tensor = load_tensor(args.descriptor)
+    options = scene_options(args)
+    outdir = _out_path(args.output)
+    result = detect(args.scene, tensor, _detect_settings(args), progress=_show_progress(args),
+                    **options)
+    report = getattr(result.scene, "report", None)
+    if report is not None:
         for warning in report.warnings:
             print(f"itensor: warning: {warning}", file=sys.stderr)
-        result = detect(scene, tensor, settings, progress=_show_progress(args))
-        result.stats["seconds"]["scene_preparation"] = round(t_prep, 4)
-        export(result, outdir, report.source, str(args.descriptor))
-        write_input_frame_outputs(result, outdir, transform, report)
-        if report.alignment is not None:
-            _say(args, f"aligned: {report.alignment['kind']} plane at z = 0 (camera height "
-                       f"{report.alignment.get('camera_height_m', '-')} m); also wrote "
-                       "predictions_input_frame.json, heatmap_input_frame.ply, top_input_frame/")
+    t0 = time.perf_counter()
+    result.save(outdir, descriptor_name=str(args.descriptor), render=args.render)
+    if report is not None and report.alignment is not None:
+        _say(args, f"aligned: {report.alignment['kind']} plane at z = 0 (camera height "
+                   f"{report.alignment.get('camera_height_m', '-')} m); also wrote "
+                   "predictions_input_frame.json, heatmap_input_frame.ply, top_input_frame/")
     _report(args, result, outdir)
-    _after_detect(args, outdir)
+    if args.render and not args.json:
+        _say(args, f"wrote {outdir}/render.png (saving took {time.perf_counter() - t0:.1f} s)")
     return 0
 
 
-def _after_detect(args, outdir) -> None:
-    """Optional pictures after a detection (``--render``)."""
-    if getattr(args, "render", False):
-        from .cli_viz import render_after_detect
+# --------------------------------------------------------------------------- batch
+def cmd_batch(args) -> int:
+    from .batch import batch
 
-        render_after_detect(outdir, quiet=getattr(args, "quiet", False))
+    if args.workers is not None and args.workers < 0:
+        raise SettingsError(f"--workers must be 0 (this process) or more, got {args.workers}")
+    if args.workers is not None and args.scheduler is not None:
+        raise SettingsError("give --workers (a local cluster) or --scheduler, not both")
+    options = {"scale": args.scale, "up": args.up}
+    if args.scan:
+        options["scan"] = True
+    result = batch(args.scenes, args.descriptors, args.output, _detect_settings(args),
+                   scheduler=args.scheduler, workers=args.workers, render=not args.no_render,
+                   progress=_show_progress(args), **options)
+    if args.json:
+        print(json.dumps(result.summary()))
+    else:
+        s = result.summary()
+        _say(args, f"{s['results']} results: {s['done']} done, {s['skipped']} skipped (done "
+                   f"before), {s['failed']} failed, in {s['seconds']:.1f} s on {s['scheduler']}")
+        for r in result.rows:
+            if r["status"] == "failed":
+                print(f"itensor: failed: {r['scene']} x {r['descriptor']}: {r['message']}",
+                      file=sys.stderr)
+        _say(args, f"wrote {result.outdir}/summary.csv, summary.json, index.html")
+    return 1 if result.failed else 0
 
 
 # --------------------------------------------------------------------------- info
@@ -216,43 +301,46 @@ def cmd_info(args) -> int:
 
 # --------------------------------------------------------------------------- demo
 def cmd_demo(args) -> int:
-    from .descriptor import InteractionTensor
+    from .api import detect, train
     from .examples import demo
     from .io import write_mesh
-    from .settings import DetectSettings, TrainSettings
 
-    outdir = _out_dir(args.output)
+    outdir = _out_path(args.output)
     t0 = time.perf_counter()
     ex = demo.build()
-    settings = TrainSettings(scene_spacing=demo.DEMO_SPACING, seed=args.seed)
-    tensor = InteractionTensor.fit(ex.query, ex.scene_object, "placing-bowl", settings)
+    tensor = train(ex.query, ex.scene_object, "placing-bowl", spacing=demo.DEMO_SPACING,
+                   seed=args.seed)
     t_train = time.perf_counter() - t0
-    tensor.save(outdir / "placing-bowl.npz")
-    for name, g in (("example_query.ply", ex.query), ("example_scene_object.ply", ex.scene_object),
-                    ("scene.ply", ex.scene)):
-        write_mesh(outdir / name, g.vertices, g.faces)
     _say(args, f"trained 'placing-bowl' (procedural bowl on a 0.75 m table) in {t_train:.2f} s")
-    result = run_detection(ex.scene, tensor, DetectSettings(top_k=args.top_k, seed=args.seed),
-                           outdir, _show_progress(args), "procedural demo room",
-                           str(outdir / "placing-bowl.npz"))
+    result = detect(ex.scene, tensor, top_k=args.top_k, seed=args.seed,
+                    progress=_show_progress(args))
+    meshes = {name: (lambda path, g=g: write_mesh(path, g.vertices, g.faces))
+              for name, g in (("example_query.ply", ex.query),
+                              ("example_scene_object.ply", ex.scene_object),
+                              ("scene.ply", ex.scene))}
+    result.save(outdir, descriptor_name=str(outdir / "placing-bowl.npz"), render=args.render,
+                also={"placing-bowl.npz": tensor.save, **meshes})
     _report(args, result, outdir)
     surfaces = demo.surface_names(ex, [p.position for p in result.predictions[:5]])
     _say(args, "top 5 landed on: " + ", ".join(surfaces))
-    _after_detect(args, outdir)
+    if args.render:
+        _say(args, f"wrote {outdir}/render.png")
     _say(args, f"demo finished in {time.perf_counter() - t0:.1f} s; open {outdir}/scene.ply "
-               f"with {outdir}/heatmap.ply and {outdir}/top/*.ply in MeshLab, or run "
+               f"with {outdir}/heatmap.ply and {outdir}/top/*.ply in MeshLab, "
+               f"{outdir}/predictions.glb in a browser's glTF viewer or Blender, or run "
                f"'itensor view {outdir}' for a page to open in a browser")
     return 0
 
 
 # --------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="itensor",
         description="Where in this 3D scene can I do this? The Interaction Tensor "
                     "(Ruiz & Mayol-Cuevas) from a single example.")
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True,
+                                parser_class=Parser)
 
     p = sub.add_parser("train", help="fit a descriptor from one interaction example")
     p.add_argument("query", help="query object (mesh or point cloud), posed in the interaction")
@@ -260,8 +348,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--affordance", required=True, help="name of the interaction, e.g. placing-bowl")
     p.add_argument("-o", "--output", required=True, help="descriptor file to write (.npz)")
     p.add_argument("--normal", type=_vector, default=(0.0, 0.0, 1.0),
-                   help="expected scene normal N_aff: up (default), down, or x,y,z")
-    p.add_argument("--query-points", type=int, default=6000, help="samples on the query object")
+                   help="expected scene normal N_aff: up (default), down (filling under a tap), "
+                        "or x,y,z")
+    p.add_argument("--query-points", type=int, default=6000,
+                   help="area-uniform samples on the query object")
     p.add_argument("--spacing", type=float, default=0.01,
                    help="scene-object sample spacing in metres (detection uses the same)")
     p.add_argument("--vectors", choices=("surface", "points"), default="surface",
@@ -272,8 +362,10 @@ def build_parser() -> argparse.ArgumentParser:
                    default=None,
                    help="accept as the paper's affordance does (S_aff and clearance limit tuned "
                         "on validation scenes) instead of 0.9 x the example's own score")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("-q", "--quiet", action="store_true")
+    seed_option(p)
+    quiet_option(p)
+    p.add_argument("--json", action="store_true",
+                   help="print a one-line JSON summary instead of the report")
     _geometry_options(p)
     p.set_defaults(func=cmd_train)
 
@@ -283,58 +375,60 @@ def build_parser() -> argparse.ArgumentParser:
                         "(color.png, depth.png, intrinsics.json); omit with --depth/--intrinsics")
     p.add_argument("descriptor", help="descriptor written by 'itensor train'")
     p.add_argument("-o", "--output", required=True, help="output directory")
-    p.add_argument("--top-k", type=int, default=10, help="predictions kept after suppression")
-    p.add_argument("--sample-fraction", type=_fraction, default=0.30,
-                   help="fraction of scene points used as test points (paper: 0.3)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--criterion", choices=("paper", "gaussian"), default=None,
-                   help="score criterion: paper (default for meshes and clouds) or gaussian "
-                        "(the authors' code; default for RGB-D frames and --scan)")
-    p.add_argument("--keypoints", choices=("weighted", "uniform"), default="weighted")
-    p.add_argument("--threshold", type=_fraction, default=None,
-                   help="acceptance threshold on the normalised score (default: calibrated)")
-    p.add_argument("--spacing", type=float, default=None,
-                   help="mesh sampling spacing in metres (default: the descriptor's)")
-    p.add_argument("--normal-tolerance", type=float, default=15.0,
-                   help="largest angle in degrees between a test normal and N_aff")
-    p.add_argument("--oriented-normals", action="store_true",
-                   help="trust the sign of scene normals (default: compare the normal line)")
-    p.add_argument("--nms-radius", type=float, default=None,
-                   help="suppression radius in metres (default: the query object's width)")
-    p.add_argument("--no-early-exit", action="store_true",
-                   help="compare every keypoint of every candidate")
-    p.add_argument("--no-clearance", action="store_true",
-                   help="accept on the score alone, without the clearance test")
-    p.add_argument("--backend", choices=("auto", "numba", "numpy", "torch"), default="auto",
-                   help="scoring backend; torch runs on a CUDA device when present "
-                        "(pip install 'interaction-tensor[torch]')")
-    p.add_argument("--device", default=None,
-                   help="torch device for --backend torch (default: cuda if present, else cpu)")
-    p.add_argument("--keypoint-order", choices=("weight", "adaptive"), default="weight",
-                   help="compare keypoints in weight order (paper) or those that fail most often "
-                        "first (adaptive: same decisions and accepted scores, fewer comparisons; "
-                        "rejected pairs keep another partial score)")
+    detection_options(p)
     p.add_argument("--render", action="store_true",
                    help="also write render.png: the heat map and the top predictions")
-    p.add_argument("-q", "--quiet", action="store_true")
+    quiet_option(p)
+    p.add_argument("--json", action="store_true",
+                   help="print a one-line JSON summary instead of the report")
     _geometry_options(p)
-    from .realdata import add_realdata_options
-
-    add_realdata_options(p)
+    real_scene_options(p)
     p.set_defaults(func=cmd_detect)
 
+    p = sub.add_parser("batch", help="many scenes x many descriptors, on a local or remote "
+                                     "Dask cluster; resumes where it stopped")
+    p.add_argument("--scenes", nargs="+", required=True, metavar="SCENE",
+                   help="scene files, globs ('scans/*.ply') or manifest files (one path per "
+                        "line, or a JSON list)")
+    p.add_argument("--descriptors", nargs="+", required=True, metavar="DESCRIPTOR",
+                   help="descriptor files, globs or manifest files")
+    p.add_argument("-o", "--output", required=True,
+                   help="output directory: OUT/SCENE/DESCRIPTOR/ per pair, summary.csv, "
+                        "summary.json, index.html; finished pairs in it are skipped")
+    p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                   help="a running Dask scheduler (default: a local cluster on this machine)")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local cluster worker processes (default: the machine's cores); "
+                        "0 runs in this process without Dask")
+    p.add_argument("--no-render", action="store_true",
+                   help="skip render.png per result (faster; index.html then has no pictures)")
+    detection_options(p)
+    p.add_argument("--scan", action="store_true",
+                   help="the scenes are captured clouds: clean and gravity-align them")
+    p.add_argument("--scale", type=float, default=1.0,
+                   help="multiply coordinates by this to get metres (0.001 for mm)")
+    p.add_argument("--up", type=_axis_or_vector, default="auto",
+                   help="up axis of the scenes: auto (z; searched with --scan), z, y, or "
+                        "x,y,z with --scan")
+    quiet_option(p)
+    p.add_argument("--json", action="store_true",
+                   help="print a one-line JSON summary instead of the report")
+    p.set_defaults(func=cmd_batch)
+
     p = sub.add_parser("info", help="print what a descriptor holds")
-    p.add_argument("descriptor")
+    p.add_argument("descriptor", help="descriptor written by 'itensor train'")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_info)
 
     p = sub.add_parser("demo", help="train and detect on built-in procedural data")
     p.add_argument("-o", "--output", default="demo_out", help="output directory")
-    p.add_argument("--top-k", type=int, default=10)
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--top-k", type=int, default=10, help="predictions kept after suppression")
+    seed_option(p)
     p.add_argument("--render", action="store_true",
                    help="also write render.png: the heat map and the top predictions")
-    p.add_argument("-q", "--quiet", action="store_true")
+    quiet_option(p)
+    p.add_argument("--json", action="store_true",
+                   help="print a one-line JSON summary instead of the report")
     p.set_defaults(func=cmd_demo)
 
     for register in _EXTENSIONS:
@@ -358,11 +452,34 @@ def _register_eval(sub) -> None:
 _EXTENSIONS: list = [_register_viz, _register_eval]
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM (what ``timeout``, systemd, Slurm and Kubernetes send), raised where the
+    program is, so that every ``finally`` removes its temporary files."""
+
+
+def _on_sigterm(signum, frame):
+    raise Terminated()
+
+
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args) or 0)
+        previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    except ValueError:          # not the main thread: leave the handler alone
+        previous = None
+    try:
+        return _run(args)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _run(args) -> int:
+    try:
+        code = int(args.func(args) or 0)
+        sys.stdout.flush()        # a closed pipe shows here, inside the handlers below
+        return code
     except ItensorError as exc:
         print(f"itensor: error: {exc}", file=sys.stderr)
         return 2
@@ -370,9 +487,23 @@ def main(argv=None) -> int:
         print("itensor: error: out of memory; try a larger --spacing or a smaller "
               "--sample-fraction", file=sys.stderr)
         return 2
+    except Terminated:
+        print("itensor: terminated; earlier results left as they were", file=sys.stderr)
+        return 143
     except KeyboardInterrupt:
-        print("itensor: interrupted", file=sys.stderr)
+        print("itensor: interrupted; earlier results left as they were", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # the reader went away (``itensor info --json x | head -c 10``): stop quietly
+        try:
+            sys.stdout = open(os.devnull, "w")
+        except OSError:
+            pass
+        return 141
+    except OSError as exc:    # unwritable output, full disk, ...: one line, no traceback
+        where = f"{exc.filename}: " if exc.filename else ""
+        print(f"itensor: error: {where}{exc.strerror or exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

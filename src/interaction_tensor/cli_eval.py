@@ -1,16 +1,14 @@
 """``itensor examples`` and ``itensor evaluate``: the paper's examples and its experiments.
 
-Registered in :mod:`interaction_tensor.cli` through ``register(subparsers)``; until then (or
-stand-alone) ``python -m interaction_tensor.cli_eval ...`` runs the same commands.
+Registered in :mod:`interaction_tensor.cli` through ``register(subparsers)``.
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-from .cli import _fraction
+from .cli_common import _fraction, quiet_option, seed_option
 from .errors import InputError
 
 
@@ -154,8 +152,8 @@ def register(sub) -> None:
                    help="also use real scene-objects from --objects (sitting: stool.ply)")
     q.add_argument("--examples", nargs="*", help="only these examples")
     q.add_argument("--spacing", type=float, default=0.01, help="scene-object spacing (m)")
-    q.add_argument("--seed", type=int, default=0)
-    q.add_argument("-q", "--quiet", action="store_true")
+    seed_option(q)
+    quiet_option(q)
     q.set_defaults(func=cmd_examples_build)
 
     p = sub.add_parser("tune", help="tune S_aff and the clearance limit of each affordance on "
@@ -163,8 +161,8 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="output directory")
     p.add_argument("--objects", default=None, help="directory of real query objects")
     p.add_argument("--examples", nargs="*", help="only these examples (default: all 8)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("-q", "--quiet", action="store_true")
+    seed_option(p)
+    quiet_option(p)
     p.set_defaults(func=cmd_tune)
 
     p = sub.add_parser("evaluate", help="reproduce the paper's experiments on scenes")
@@ -186,28 +184,18 @@ def register(sub) -> None:
     p.add_argument("--max-bs-candidates", type=_positive_int, default=12,
                    help="candidates scored by the BS baseline per (example, scene) (default 12)")
     p.add_argument("--spacing", type=float, default=0.01, help="sampling spacing (m)")
-    p.add_argument("--no-pictures", action="store_true")
+    p.add_argument("--no-pictures", action="store_true",
+                   help="skip the close-up pictures of the judged poses (faster)")
     p.add_argument("--no-judge-check", action="store_true",
                    help="skip judging the labelled poses (e.g. in all but one of the runs "
                         "that `itensor evaluate-merge` will combine)")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("-q", "--quiet", action="store_true")
+    seed_option(p)
+    quiet_option(p)
     p.set_defaults(func=cmd_evaluate)
 
     p = sub.add_parser("evaluate-merge",
                        help="merge `itensor evaluate` runs made on disjoint scene subsets")
     p.add_argument("runs", nargs="+", help="output directories of the runs (same settings)")
     p.add_argument("-o", "--output", required=True, help="output directory")
-    p.add_argument("-q", "--quiet", action="store_true")
+    quiet_option(p)
     p.set_defaults(func=cmd_evaluate_merge)
-
-
-def main(argv=None) -> int:
-    """``python -m interaction_tensor.cli_eval`` is ``itensor`` (these commands included)."""
-    from .cli import main as itensor_main
-
-    return itensor_main(argv)
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -1,26 +1,15 @@
 """``itensor view``, ``itensor show`` and ``itensor render``: pictures and the HTML viewer.
 
-Registered into the main parser through ``cli._EXTENSIONS``; ``render_after_detect`` is what
-``detect --render`` and ``demo --render`` call after exporting.
+Registered into the main parser through ``cli._EXTENSIONS``. (``detect --render`` and
+``demo --render`` draw ``render.png`` inside their output transaction, ``Detection.save``.)
 """
 
 from __future__ import annotations
 
 import time
-from pathlib import Path
 
+from .cli_common import quiet_option
 from .errors import InputError
-
-
-def render_after_detect(outdir, quiet: bool = False) -> Path:
-    """Write ``OUTDIR/render.png`` for a directory just written by detect/demo; return it."""
-    from .viz import render_outdir
-
-    t0 = time.perf_counter()
-    path = render_outdir(outdir)
-    if not quiet:
-        print(f"wrote {path} in {time.perf_counter() - t0:.1f} s")
-    return path
 
 
 def cmd_view(args) -> int:
@@ -62,18 +51,18 @@ def register(subparsers) -> None:
     p.add_argument("outdir", help="a directory written by 'itensor detect' or 'itensor demo'")
     p.add_argument("--max-points", type=int, default=200_000,
                    help="scene points kept for the browser (default 200000)")
-    p.add_argument("-q", "--quiet", action="store_true")
+    quiet_option(p)
     p.set_defaults(func=cmd_view)
 
     p = subparsers.add_parser("show", help="draw a descriptor like the paper's figure 2")
     p.add_argument("descriptor", help="descriptor written by 'itensor train'")
     p.add_argument("--render", required=True, metavar="OUT.png", help="PNG file to write")
-    p.add_argument("-q", "--quiet", action="store_true")
+    quiet_option(p)
     p.set_defaults(func=cmd_show)
 
     p = subparsers.add_parser("render", help="(re)draw OUTDIR/render.png for a detection")
     p.add_argument("outdir", help="a directory written by 'itensor detect' or 'itensor demo'")
     p.add_argument("-o", "--output", default=None, help="PNG to write (default OUTDIR/render.png)")
     p.add_argument("--top-k", type=int, default=None, help="objects drawn (default: all)")
-    p.add_argument("-q", "--quiet", action="store_true")
+    quiet_option(p)
     p.set_defaults(func=cmd_render)

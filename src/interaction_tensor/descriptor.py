@@ -23,7 +23,7 @@ from .io import Geometry, atomic_path, validate_geometry
 from .sampling import (mean_spacing, mesh_area, sample_mesh, uniform_keypoints,
                        weighted_keypoints, estimate_normals)
 from .scoring import surface_vectors
-from .settings import TrainSettings
+from .settings import MIN_SPACING, TrainSettings
 
 FORMAT = "interaction-tensor-descriptor"
 FORMAT_VERSION = 2
@@ -332,39 +332,37 @@ class InteractionTensor:
         try:
             with np.load(path, allow_pickle=False) as data:
                 arrays = {k: data[k] for k in data.files}
-        except Exception as exc:
-            raise InputError(path, f"not a descriptor file ({type(exc).__name__}: {exc})") from None
+        except Exception as exc:  # zip, npy and pickle refusals alike: one line, no advice
+            reason = "holds Python objects, which are never loaded" \
+                if "pickle" in str(exc).lower() else type(exc).__name__
+            raise InputError(path, f"not a descriptor file ({reason})") from None
         try:
             header = json.loads(arrays.pop("header").tobytes().decode("utf-8"))
         except Exception:
             raise InputError(path, "not a descriptor file (no readable header)") from None
-        if header.get("format") != FORMAT:
+        if not isinstance(header, dict) or header.get("format") != FORMAT:
             raise InputError(path, "not an interaction-tensor descriptor")
         if header.get("format_version") not in READABLE_VERSIONS:
             raise InputError(path, f"descriptor format version {header.get('format_version')} "
                                    "is not supported (this version reads "
                                    f"{', '.join(map(str, READABLE_VERSIONS))})")
-        try:
-            sets = {name: Keypoints(arrays[f"{name}_points"], arrays[f"{name}_provenance"],
-                                    arrays[f"{name}_weights"]) for name in ("weighted", "uniform")}
-            tensor = cls(
-                affordance=header["affordance"], reference_point=arrays["reference_point"],
-                affordance_normal=arrays["affordance_normal"], radius=float(header["radius"]),
-                query_centroid=arrays["query_centroid"], bisector_points=arrays["bisector_points"],
-                provenance_vectors=arrays["provenance_vectors"], weights=arrays["weights"],
-                weighted=sets["weighted"], uniform=sets["uniform"],
-                query_vertices=arrays["query_vertices"], query_faces=arrays["query_faces"],
-                contact_points=arrays["contact_points"], scene_points=arrays["scene_points"],
-                scene_spacing=float(header["scene_spacing"]), vectors=header["vectors"],
-                clearance_points=arrays.get("clearance_points", np.zeros((0, 3))),
-                clearance_radius=arrays.get("clearance_radius", np.zeros(0)),
-                clearance_limit=float(header.get("clearance_limit", 0.05)),
-                thresholds=header["thresholds"],
-                self_scores=header["self_scores"], meta=header.get("meta", {}))
-        except KeyError as exc:
-            raise InputError(path, f"descriptor is missing {exc.args[0]!r}") from None
-        if tensor.weighted.points.shape != tensor.weighted.provenance.shape:
-            raise InputError(path, "descriptor arrays have inconsistent shapes")
+        header, arrays = validate_descriptor(path, header, arrays)
+        sets = {name: Keypoints(arrays[f"{name}_points"], arrays[f"{name}_provenance"],
+                                arrays[f"{name}_weights"]) for name in ("weighted", "uniform")}
+        tensor = cls(
+            affordance=header["affordance"], reference_point=arrays["reference_point"],
+            affordance_normal=arrays["affordance_normal"], radius=float(header["radius"]),
+            query_centroid=arrays["query_centroid"], bisector_points=arrays["bisector_points"],
+            provenance_vectors=arrays["provenance_vectors"], weights=arrays["weights"],
+            weighted=sets["weighted"], uniform=sets["uniform"],
+            query_vertices=arrays["query_vertices"], query_faces=arrays["query_faces"],
+            contact_points=arrays["contact_points"], scene_points=arrays["scene_points"],
+            scene_spacing=float(header["scene_spacing"]), vectors=header["vectors"],
+            clearance_points=arrays["clearance_points"],
+            clearance_radius=arrays["clearance_radius"],
+            clearance_limit=float(header["clearance_limit"]),
+            thresholds=header["thresholds"],
+            self_scores=header["self_scores"], meta=header["meta"])
         return tensor
 
     def summary(self) -> dict:
@@ -390,6 +388,112 @@ class InteractionTensor:
             "thresholds": self.thresholds, "self_scores": self.self_scores,
             "meta": self.meta,
         }
+
+
+#: descriptor arrays: name -> (shape with None for any length, kind: "f" float or "i" int)
+_ARRAYS = {
+    "reference_point": ((3,), "f"), "affordance_normal": ((3,), "f"),
+    "query_centroid": ((3,), "f"), "bisector_points": ((None, 3), "f"),
+    "provenance_vectors": ((None, 3), "f"), "weights": ((None,), "f"),
+    "query_vertices": ((None, 3), "f"), "query_faces": ((None, 3), "i"),
+    "contact_points": ((None, 3), "f"), "scene_points": ((None, 3), "f"),
+    "clearance_points": ((None, 3), "f"), "clearance_radius": ((None,), "f"),
+    **{f"{k}_{part}": (shape, "f") for k in ("weighted", "uniform")
+       for part, shape in (("points", (None, 3)), ("provenance", (None, 3)),
+                           ("weights", (None,)))},
+}
+
+
+def validate_descriptor(path, header: dict, arrays: dict):
+    """Check a descriptor's header and arrays against the format before any use.
+
+    Shapes, dtypes, finiteness, ranges, known names and index bounds; the first problem is
+    raised as an :class:`InputError` naming the field. Returns (header, arrays) with arrays
+    as float64 / int64 and the optional fields of older versions filled in.
+    """
+    def bad(field, problem):
+        raise InputError(path, f"descriptor field {field!r} {problem}")
+
+    out = {}
+    for name, (shape, kind) in _ARRAYS.items():
+        if name not in arrays:
+            if name in ("clearance_points", "clearance_radius"):    # format version 1
+                out[name] = np.zeros((0, 3)) if name == "clearance_points" else np.zeros(0)
+                continue
+            bad(name, "is missing")
+        a = arrays[name]
+        if a.dtype.kind not in ("fiu" if kind == "f" else "iu") or a.dtype.kind == "b":
+            bad(name, f"has type {a.dtype}, expected {'numbers' if kind == 'f' else 'integers'}")
+        if a.ndim != len(shape) or any(want is not None and got != want
+                                       for got, want in zip(a.shape, shape)):
+            want = "(" + ", ".join("N" if w is None else str(w) for w in shape) + ")"
+            bad(name, f"has shape {a.shape}, expected {want}")
+        a = a.astype(np.float64 if kind == "f" else np.int64)
+        if kind == "f" and not np.isfinite(a).all():
+            bad(name, "holds NaN or infinite values")
+        out[name] = a
+    for name in ("bisector_points", "weighted_points", "uniform_points", "query_vertices"):
+        if len(out[name]) == 0:
+            bad(name, "is empty")
+    for prefix in ("weighted", "uniform"):
+        n = len(out[f"{prefix}_points"])
+        for part in ("provenance", "weights"):
+            if len(out[f"{prefix}_{part}"]) != n:
+                bad(f"{prefix}_{part}", f"has {len(out[f'{prefix}_{part}'])} rows for {n} points")
+    if len(out["provenance_vectors"]) != len(out["bisector_points"]) or \
+            len(out["weights"]) != len(out["bisector_points"]):
+        bad("provenance_vectors", "and weights must have one row per bisector point")
+    if len(out["clearance_radius"]) != len(out["clearance_points"]):
+        bad("clearance_radius", "must have one value per clearance point")
+    for name in ("weights", "weighted_weights", "uniform_weights"):
+        w = out[name]
+        if w.min() < 0 or w.max() > 1:
+            bad(name, f"must lie in [0, 1], found {w.min():.3g}..{w.max():.3g}")
+    for name in ("weighted_weights", "uniform_weights"):
+        if not out[name].sum() > 0:
+            bad(name, "are all zero")
+    if out["clearance_radius"].size and out["clearance_radius"].min() < 0:
+        bad("clearance_radius", "holds negative values")
+    if not np.linalg.norm(out["affordance_normal"]) > 1e-9:
+        bad("affordance_normal", "is zero")
+    faces = out["query_faces"]
+    if faces.size and (faces.min() < 0 or faces.max() >= len(out["query_vertices"])):
+        bad("query_faces", f"index vertices that do not exist (0..{faces.max()} for "
+                           f"{len(out['query_vertices'])} vertices)")
+
+    def number(field, low, high, default=None):
+        value = header.get(field, default)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            bad(field, f"must be a number, got {value!r}")
+        if not (np.isfinite(value) and low <= value <= high):
+            bad(field, f"must be in [{low:g}, {high:g}], got {value!r}")
+        return float(value)
+
+    affordance = header.get("affordance")
+    if not isinstance(affordance, str) or not affordance.strip():
+        bad("affordance", f"must be a non-empty name, got {affordance!r}")
+    radius = number("radius", 1e-4, 100.0)
+    number("scene_spacing", MIN_SPACING, 1.0)
+    number("clearance_limit", 0.0, 1.0, 0.05)
+    if header.get("vectors") not in ("surface", "points"):
+        bad("vectors", f"must be 'surface' or 'points', got {header.get('vectors')!r}")
+    for table_name in ("thresholds", "self_scores"):
+        table = header.get(table_name)
+        if not isinstance(table, dict):
+            bad(table_name, "must be a table of numbers")
+        low_ok = table_name == "self_scores"     # a self score may be 0, a threshold not
+        for key, value in table.items():
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or \
+                    not np.isfinite(value) or not (0 <= value <= 1) or (value == 0 and not low_ok):
+                bad(f"{table_name}.{key}", f"must be a number in {'[0, 1]' if low_ok else '(0, 1]'}"
+                                           f", got {value!r}")
+    meta = header.get("meta", {})
+    if not isinstance(meta, dict):
+        bad("meta", "must be a table")
+    if np.linalg.norm(out["reference_point"] - out["query_centroid"]) > 10 * radius:
+        bad("reference_point", "lies far outside the query object (more than 10 x its radius)")
+    header = {**header, "clearance_limit": header.get("clearance_limit", 0.05), "meta": meta}
+    return header, out
 
 
 def _scene_object_samples(scene_object: Geometry, centre, crop: float, spacing: float, seed):

@@ -9,15 +9,19 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .descriptor import InteractionTensor
 from .predictions import Prediction, heat_map, top_k
 from .scene import Scene
 from .kernels import ScoreJob, score_jobs
 from .scoring import PairScores, all_terms, make_table, permuted, score_pairs
 from .settings import DetectSettings
+
+if TYPE_CHECKING:   # annotations only: descriptor imports this module to calibrate
+    from .descriptor import InteractionTensor
 
 
 def resolve_backend(name: str) -> str:
@@ -64,7 +68,7 @@ def score_at(tensor: InteractionTensor, scene: Scene, positions, orientation_ind
 
     Returns (P,) float64 normalised scores in [0, 1].
     """
-    settings = DetectSettings(**overrides)
+    settings = DetectSettings(**overrides).for_scene(scene)
     table = keypoint_table(tensor, settings)
     res = score_pairs(np.asarray(positions, float), np.asarray(orientation_index, int), table,
                       scene, threshold=1.0, vectors=tensor.vectors, early_exit=False)
@@ -126,6 +130,89 @@ class Detection:
     def accepted(self) -> np.ndarray:
         """Indices into the pair arrays of accepted pairs."""
         return np.flatnonzero(self.pairs.accepted)
+
+    # ------------------------------------------------------------ the top predictions as arrays
+    @property
+    def positions(self) -> np.ndarray:
+        """(K, 3) test points of the top predictions, best first (metres)."""
+        return np.array([p.position for p in self.predictions], np.float64).reshape(-1, 3)
+
+    @property
+    def scores(self) -> np.ndarray:
+        """(K,) normalised scores of the top predictions, best first."""
+        return np.array([p.score for p in self.predictions], np.float64)
+
+    @property
+    def orientations(self) -> np.ndarray:
+        """(K,) angles (radians) about +Z of the top predictions."""
+        return np.array([p.angle for p in self.predictions], np.float64)
+
+    @property
+    def orientation_indices(self) -> np.ndarray:
+        """(K,) orientation indices i (angle = i * 2 pi / n_orientations)."""
+        return np.array([p.orientation_index for p in self.predictions], np.int64)
+
+    @property
+    def poses(self) -> np.ndarray:
+        """(K, 4, 4) rigid transforms of the training-frame query object into the scene."""
+        return np.array([p.pose for p in self.predictions], np.float64).reshape(-1, 4, 4)
+
+    def __repr__(self) -> str:
+        best = f", best {self.predictions[0].score:.3f}" if self.predictions else ""
+        return (f"<Detection {self.tensor.affordance!r} in {self.scene.source}: "
+                f"{len(self.predictions)} predictions{best}; {int(self.pairs.accepted.sum())} of "
+                f"{len(self.pair_point)} pairs accepted at threshold {self.threshold:.3f}>")
+
+    # ------------------------------------------------------------ outputs
+    def save(self, outdir, *, render: bool = False, scene_name: str | None = None,
+             descriptor_name: str | None = None, also: dict | None = None) -> Path:
+        """Write the result into ``outdir`` (what ``itensor detect -o`` writes), as one
+        transaction: built in a temporary sibling directory and swapped in, so ``outdir``
+        holds either the complete earlier result or the complete new one.
+
+        ``predictions.json``, ``heatmap.ply`` (score as ``quality`` and ``scalar_score``),
+        ``predictions.glb`` (scene heat map and posed objects, for browsers and Blender) and
+        ``top/``; for a captured scene also the same in the input's own frame; with
+        ``render`` also ``render.png``. ``also`` maps further file names to functions that
+        write them (given the path), inside the same transaction. An existing ``outdir`` must
+        be empty or hold an earlier result (and nothing else). Returns ``outdir`` as a Path.
+        """
+        from .io import atomic_dir
+        from .predictions import OUTPUT_NAMES, export
+
+        outdir = Path(outdir)
+        t = time.perf_counter()
+        report = getattr(self.scene, "report", None)
+        also = dict(also or {})
+        with atomic_dir(outdir, "predictions.json", OUTPUT_NAMES + tuple(also)) as tmp:
+            for name, write in also.items():
+                write(tmp / name)
+            export(self, tmp, scene_name or (report.source if report is not None else None),
+                   descriptor_name)
+            if report is not None:
+                from .realdata import write_input_frame_outputs
+
+                write_input_frame_outputs(self, tmp, report.transform, report)
+            self.stats["seconds"]["export"] = round(time.perf_counter() - t, 4)
+            if render:
+                from .viz.render import render_outdir
+
+                render_outdir(tmp)
+        return outdir
+
+    def to_trimesh(self):
+        """A ``trimesh.Scene``: the scene points coloured by the heat map (grey: nothing
+        accepted near) and the query object posed at each top prediction."""
+        from .predictions import result_scene
+
+        return result_scene(self)
+
+    def to_open3d(self) -> list:
+        """Open3D geometries: the heat-map point cloud, then one posed query per prediction
+        (``open3d.visualization.draw_geometries(result.to_open3d())``)."""
+        from .predictions import result_open3d
+
+        return result_open3d(self)
 
 
 def suppression_radius(tensor: InteractionTensor, settings: DetectSettings) -> float:
@@ -315,7 +402,7 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     :func:`detect` gives for it alone. ``test_indices`` (scene indices) replaces the seeded
     random draw of ``settings.sample_fraction``.
     """
-    settings = settings or DetectSettings()
+    settings = (settings or DetectSettings()).for_scene(scene)
     t0 = time.perf_counter()
     timings = {}
     if test_indices is None:

@@ -1,7 +1,9 @@
 """Load meshes and point clouds (metres, +Z up) and write results atomically.
 
-Formats: PLY, OBJ, OFF, STL through trimesh; PCD (ascii and binary) through a small
-reader here, binary_compressed PCD through Open3D when it is installed.
+:func:`load_geometry` reads a file (one reader per format, in :mod:`.readers`);
+:func:`as_geometry` takes whatever a user already holds: a path, a :class:`Geometry`, a
+``trimesh`` mesh or point cloud, an Open3D point cloud or triangle mesh, or an ``(N, 3)``
+array.
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ import contextlib
 import json
 import os
 import shutil
+import stat
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,8 +21,8 @@ import numpy as np
 
 from .errors import InputError
 
-MESH_SUFFIXES = (".ply", ".obj", ".off", ".stl")
-CLOUD_SUFFIXES = (".pcd",)
+MESH_SUFFIXES = (".ply", ".obj", ".off", ".stl", ".glb", ".gltf")
+CLOUD_SUFFIXES = (".pcd", ".xyz", ".xyzn", ".pts", ".npy", ".las", ".laz", ".e57")
 SUFFIXES = MESH_SUFFIXES + CLOUD_SUFFIXES
 UP_AXES = ("z", "y")
 
@@ -84,6 +87,10 @@ def validate_geometry(geometry: Geometry, name=None, min_points: int = 4) -> Geo
     extent = np.ptp(v, axis=0)
     if extent.max() <= 0:
         raise InputError(name, "all points coincide (degenerate geometry)")
+    sample = v[:: max(1, len(v) // 100_000)]
+    spread = np.linalg.svd(sample - sample.mean(axis=0), compute_uv=False)
+    if spread[1] <= 1e-9 * spread[0]:
+        raise InputError(name, "all points lie on one line (degenerate geometry)")
     if geometry.faces is not None and len(geometry.faces):
         f = geometry.faces
         if f.min() < 0 or f.max() >= len(v):
@@ -95,7 +102,7 @@ def validate_geometry(geometry: Geometry, name=None, min_points: int = 4) -> Geo
             raise InputError(name, "mesh has zero surface area (degenerate faces)")
     if extent.max() > 1000:
         raise InputError(name, f"extent {extent.max():.0f} m is implausible for metres; "
-                               "pass --scale (e.g. 0.001 for millimetres)")
+                               "give the scale to metres (scale=0.001 or --scale 0.001 for millimetres)")
     return geometry
 
 
@@ -104,155 +111,167 @@ def load_geometry(path, scale: float = 1.0, up: str = "z") -> Geometry:
 
     Parameters
     ----------
-    path : str or Path. PLY, OBJ, OFF, STL (mesh or cloud) or PCD (cloud).
+    path : str or Path: PLY (ASCII or binary, mesh or cloud), OBJ, OFF, STL, GLB/GLTF, PCD,
+        XYZ (x y z [r g b]), XYZN (x y z nx ny nz), PTS, NPY ((N, 3) or (N, 6) with normals),
+        LAS/LAZ (extra ``las``), E57 (extra ``e57``). See :mod:`interaction_tensor.readers`.
     scale : float, multiplies the coordinates (0.001 for a file in millimetres).
     up : ``"z"`` or ``"y"``, the file's up axis.
     """
+    from .readers import READERS
+
     path = Path(path)
-    if not path.exists():
-        raise InputError(path, "no such file")
-    if path.is_dir():
+    try:
+        st = path.stat()
+    except FileNotFoundError:
+        raise InputError(path, "no such file") from None
+    except OSError as exc:
+        raise InputError(path, f"cannot read: {exc.strerror}") from None
+    if stat.S_ISDIR(st.st_mode):
         raise InputError(path, "is a directory, expected a mesh or point-cloud file")
+    if not stat.S_ISREG(st.st_mode):
+        raise InputError(path, "is not a regular file (a pipe or a device); give a file")
     suffix = path.suffix.lower()
-    if suffix not in SUFFIXES:
+    if suffix not in READERS:
         raise InputError(path, f"unknown format {suffix or '(no extension)'!r}; "
                                f"use one of {', '.join(SUFFIXES)}")
     if not (np.isfinite(scale) and scale > 0):
         raise InputError(path, f"scale must be a positive number, got {scale}")
     rot = up_rotation(up)
     try:
-        size = path.stat().st_size
         with open(path, "rb"):
             pass
     except OSError as exc:
         raise InputError(path, f"cannot read: {exc.strerror}") from None
-    if size == 0:
+    if st.st_size == 0:
         raise InputError(path, "file is empty")
     try:
-        if suffix == ".pcd":
-            geometry = _read_pcd(path)
-        else:
-            geometry = _read_trimesh(path)
+        geometry = READERS[suffix](path)
     except InputError:
+        raise
+    except MemoryError:
         raise
     except Exception as exc:  # parser errors of every kind become one line
         raise InputError(path, f"cannot parse as {suffix[1:].upper()}: {exc}") from None
     geometry.source = str(path)
+    return _to_library_frame(geometry, scale, rot, path)
+
+
+def _to_library_frame(geometry: Geometry, scale: float, rot: np.ndarray, name) -> Geometry:
     with np.errstate(invalid="ignore", over="ignore"):   # NaN/inf are reported below
         geometry.vertices = (geometry.vertices.astype(np.float64) * scale) @ rot.T
         if geometry.normals is not None:
             geometry.normals = geometry.normals.astype(np.float64) @ rot.T
-    return validate_geometry(geometry, path)
+    if geometry.normals is not None and len(geometry.normals) != len(geometry.vertices):
+        raise InputError(name, f"{len(geometry.normals)} normals for "
+                               f"{len(geometry.vertices)} points")
+    if geometry.colors is not None and len(geometry.colors) != len(geometry.vertices):
+        raise InputError(name, f"{len(geometry.colors)} colours for "
+                               f"{len(geometry.vertices)} points")
+    return validate_geometry(geometry, name)
 
 
-def _read_trimesh(path: Path) -> Geometry:
-    import trimesh
+def as_geometry(obj, normals=None, *, scale: float = 1.0, up: str = "z",
+                name: str = "geometry") -> Geometry:
+    """Whatever a user holds, as a :class:`Geometry` in metres, +Z up.
 
-    loaded = trimesh.load(str(path), process=False, force=None)
-    if isinstance(loaded, trimesh.Scene):
-        if not loaded.geometry:
-            raise InputError(path, "file holds no geometry")
-        loaded = loaded.to_geometry() if hasattr(loaded, "to_geometry") else loaded.dump(concatenate=True)
-    if isinstance(loaded, trimesh.Trimesh):
-        faces = np.asarray(loaded.faces, dtype=np.int64)
-        colors = None
-        return Geometry(np.asarray(loaded.vertices, dtype=np.float64),
-                        faces if len(faces) else None, None, colors)
-    if isinstance(loaded, trimesh.PointCloud):
-        colors = None
-        vc = getattr(loaded, "colors", None)
-        if vc is not None and len(vc) == len(loaded.vertices):
-            colors = np.asarray(vc)[:, :3].astype(np.uint8)
-        normals = None
-        attrs = loaded.metadata.get("_ply_raw", {}).get("vertex", {}).get("data") \
-            if isinstance(loaded.metadata, dict) else None
-        if attrs is not None and all(k in attrs.dtype.names for k in ("nx", "ny", "nz")):
-            normals = np.column_stack([attrs["nx"], attrs["ny"], attrs["nz"]]).astype(float)
-        return Geometry(np.asarray(loaded.vertices, dtype=np.float64), None, normals, colors)
-    raise InputError(path, f"unsupported content {type(loaded).__name__}")
-
-
-_PCD_TYPES = {("F", 4): "<f4", ("F", 8): "<f8", ("U", 1): "<u1", ("U", 2): "<u2",
-              ("U", 4): "<u4", ("I", 1): "<i1", ("I", 2): "<i2", ("I", 4): "<i4",
-              ("U", 8): "<u8", ("I", 8): "<i8"}
+    Parameters
+    ----------
+    obj : a path (str or Path; see :func:`load_geometry`), a :class:`Geometry`, a
+        ``trimesh.Trimesh``, ``trimesh.PointCloud`` or ``trimesh.Scene``, an Open3D
+        ``PointCloud`` or ``TriangleMesh``, or an ``(N, 3)`` array of points (an ``(N, 6)``
+        array is points and normals)
+    normals : optional ``(N, 3)`` normals of an array or a point cloud
+    scale, up : as for :func:`load_geometry`: multiply by ``scale``, turn ``up`` to +Z
+    name : how errors name the argument (e.g. ``"scene"``)
+    """
+    if isinstance(obj, (str, os.PathLike)):
+        geometry = load_geometry(obj, scale, up)
+        if normals is not None:
+            geometry.normals = np.asarray(normals, np.float64) @ up_rotation(up).T
+            _to_library_frame(geometry, 1.0, np.eye(3), name)
+        return geometry
+    if not (np.isfinite(scale) and scale > 0):
+        raise InputError(None, f"{name}: scale must be a positive number, got {scale}")
+    rot = up_rotation(up)
+    geometry = _from_object(obj, name)
+    if normals is not None:
+        geometry.normals = np.asarray(normals, np.float64)
+    return _to_library_frame(geometry, scale, rot, name)
 
 
-def _read_pcd(path: Path) -> Geometry:
-    raw = path.read_bytes()
-    header = {}
-    offset = 0
-    while True:
-        end = raw.find(b"\n", offset)
-        if end < 0:
-            raise InputError(path, "PCD header has no DATA line")
-        line = raw[offset:end].decode("ascii", "replace").strip()
-        offset = end + 1
-        if not line or line.startswith("#"):
-            continue
-        key, _, value = line.partition(" ")
-        header[key.upper()] = value.split()
-        if key.upper() == "DATA":
-            break
-    try:
-        names = header["FIELDS"]
-        sizes = [int(s) for s in header["SIZE"]]
-        types = header["TYPE"]
-        counts = [int(c) for c in header.get("COUNT", ["1"] * len(names))]
-        n = int(header["POINTS"][0])
-        mode = header["DATA"][0].lower()
-    except (KeyError, ValueError, IndexError):
-        raise InputError(path, "PCD header lacks FIELDS/SIZE/TYPE/POINTS") from None
-    if mode == "binary_compressed":
+def _from_object(obj, name: str) -> Geometry:
+    """A copy of ``obj`` as a Geometry in its own units and axes."""
+    if isinstance(obj, Geometry):
+        return Geometry(np.array(obj.vertices, np.float64),
+                        None if obj.faces is None else np.array(obj.faces, np.int64),
+                        None if obj.normals is None else np.array(obj.normals, np.float64),
+                        obj.colors, obj.source)
+    module = type(obj).__module__ or ""
+    kind = type(obj).__name__
+    if module.startswith("trimesh"):
+        import trimesh
+
+        if isinstance(obj, trimesh.Scene):
+            if not obj.geometry:
+                raise InputError(None, f"{name}: the trimesh Scene holds no geometry")
+            obj = obj.to_geometry() if hasattr(obj, "to_geometry") else obj.dump(concatenate=True)
+        if isinstance(obj, trimesh.Trimesh):
+            colors = None
+            if getattr(obj.visual, "kind", None) == "vertex":
+                colors = np.asarray(obj.visual.vertex_colors)[:, :3].astype(np.uint8)
+            return Geometry(np.array(obj.vertices, np.float64),
+                            np.array(obj.faces, np.int64) if len(obj.faces) else None,
+                            None, colors, f"<trimesh {name}>")
+        if isinstance(obj, trimesh.PointCloud):
+            vc = getattr(obj, "colors", None)
+            colors = np.asarray(vc)[:, :3].astype(np.uint8) \
+                if vc is not None and len(vc) == len(obj.vertices) else None
+            return Geometry(np.array(obj.vertices, np.float64), None, None, colors,
+                            f"<trimesh {name}>")
+    if module.startswith("open3d"):
+        if hasattr(obj, "triangles") and hasattr(obj, "vertices"):
+            faces = np.asarray(obj.triangles, np.int64)
+            colors = (np.asarray(obj.vertex_colors) * 255).round().astype(np.uint8) \
+                if obj.has_vertex_colors() else None
+            return Geometry(np.array(obj.vertices, np.float64), faces if len(faces) else None,
+                            None, colors, f"<open3d {name}>")
+        if hasattr(obj, "points"):
+            normals = np.array(obj.normals, np.float64) if obj.has_normals() else None
+            colors = (np.asarray(obj.colors) * 255).round().astype(np.uint8) \
+                if obj.has_colors() else None
+            return Geometry(np.array(obj.points, np.float64), None, normals, colors,
+                            f"<open3d {name}>")
+    if isinstance(obj, (np.ndarray, list, tuple)):
         try:
-            import open3d as o3d
-        except ImportError:
-            raise InputError(path, "binary_compressed PCD needs Open3D: "
-                                   "pip install 'interaction-tensor[open3d]'") from None
-        pc = o3d.io.read_point_cloud(str(path))
-        pts = np.asarray(pc.points, dtype=np.float64)
-        nrm = np.asarray(pc.normals, dtype=np.float64) if pc.has_normals() else None
-        col = (np.asarray(pc.colors) * 255).astype(np.uint8) if pc.has_colors() else None
-        return Geometry(pts, None, nrm, col)
-    dtype = []
-    for name, size, typ, count in zip(names, sizes, types, counts):
-        base = _PCD_TYPES.get((typ.upper(), size))
-        if base is None:
-            raise InputError(path, f"PCD field {name!r} has unsupported type {typ}{size}")
-        dtype.append((name if name != "_" else f"_pad{len(dtype)}", base, (count,)) if count > 1
-                     else (name if name != "_" else f"_pad{len(dtype)}", base))
-    dtype = np.dtype(dtype)
-    if mode == "binary":
-        if len(raw) - offset < n * dtype.itemsize:
-            raise InputError(path, "PCD binary data is shorter than its header says")
-        data = np.frombuffer(raw, dtype=dtype, count=n, offset=offset)
-    elif mode == "ascii":
-        table = np.loadtxt(raw[offset:].decode("ascii").splitlines(), ndmin=2)
-        if table.shape[0] != n:
-            raise InputError(path, f"PCD header says {n} points, file has {table.shape[0]}")
-        data = np.zeros(n, dtype=dtype)
-        col = 0
-        for name, count in zip(dtype.names, counts):
-            data[name] = table[:, col] if count == 1 else table[:, col:col + count]
-            col += count
-    else:
-        raise InputError(path, f"unknown PCD DATA mode {mode!r}")
-    if not all(k in data.dtype.names for k in "xyz"):
-        raise InputError(path, "PCD has no x y z fields")
-    pts = np.column_stack([data["x"], data["y"], data["z"]]).astype(np.float64)
-    keep = np.isfinite(pts).all(axis=1)  # PCL marks missing points with NaN
-    normals = None
-    if all(k in data.dtype.names for k in ("normal_x", "normal_y", "normal_z")):
-        normals = np.column_stack([data["normal_x"], data["normal_y"], data["normal_z"]])[keep]
-    colors = None
-    for key in ("rgb", "rgba"):
-        if key in data.dtype.names:
-            packed = np.ascontiguousarray(data[key]).view(np.uint32)[keep]
-            colors = np.column_stack([(packed >> 16) & 255, (packed >> 8) & 255,
-                                      packed & 255]).astype(np.uint8)
-    return Geometry(pts[keep], None, normals, colors)
+            arr = np.array(obj, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputError(None, f"{name}: expected numbers, got a {kind} that is not "
+                                   "numeric") from None
+        if arr.ndim != 2 or arr.shape[1] not in (3, 6):
+            raise InputError(None, f"{name}: expected an (N, 3) array of points (or (N, 6) "
+                                   f"with normals), got shape {arr.shape}")
+        return Geometry(arr[:, :3].copy(), None,
+                        arr[:, 3:].copy() if arr.shape[1] == 6 else None, None,
+                        f"<array {name}>")
+    raise InputError(None, f"{name}: cannot use a {module + '.' if module else ''}{kind}; give "
+                           "a path, a trimesh or Open3D geometry, or an (N, 3) array")
 
 
 # --- writing -------------------------------------------------------------------------
+
+def make_dirs(directory, target=None) -> None:
+    """``mkdir -p directory``; failures (a file in the way, no permission) become one-line
+    errors naming ``target`` (default: the directory)."""
+    directory = Path(directory)
+    target = directory if target is None else target
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        raise InputError(target, "cannot write: a file is in the way of its directory "
+                                 f"({directory})") from None
+    except OSError as exc:
+        raise InputError(target, f"cannot write: {exc.strerror}") from None
+
 
 @contextlib.contextmanager
 def atomic_path(path):
@@ -261,9 +280,14 @@ def atomic_path(path):
     An interrupted or failed write leaves ``path`` as it was.
     """
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part" + path.suffix,
-                               dir=path.parent)
+    make_dirs(path.parent, path)
+    if path.is_dir():
+        raise InputError(path, "cannot write: it is a directory")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part" + path.suffix,
+                                   dir=path.parent)
+    except OSError as exc:
+        raise InputError(path, f"cannot write: {exc.strerror}") from None
     os.close(fd)
     umask = os.umask(0)
     os.umask(umask)
@@ -277,36 +301,99 @@ def atomic_path(path):
 
 
 @contextlib.contextmanager
-def atomic_dir(path, marker: str):
+def atomic_dir(path, marker: str, allowed=None):
     """Yield a fresh temporary directory beside ``path``; swap it in for ``path`` on success.
 
     An interrupted or failed run leaves ``path`` as it was (the earlier complete result, or
     nothing). ``path`` may already exist only as an earlier output of the same command: empty,
-    or holding ``marker`` (e.g. ``run.json``); a directory holding other files is refused rather
-    than replaced.
+    or holding ``marker`` (e.g. ``run.json``) and, when ``allowed`` (names) is given, nothing
+    but those names; a directory holding other files is refused rather than replaced.
+
+    A lock file beside ``path`` (``.NAME.lock``) makes a second run into the same directory
+    refuse while the first is writing; temporaries left by a killed run are removed.
     """
     path = Path(path)
-    if path.exists():
-        if not path.is_dir():
-            raise InputError(path, "exists and is not a directory")
-        if any(path.iterdir()) and not (path / marker).exists():
-            raise InputError(path, f"exists and holds files that are not an earlier output "
-                                   f"(no {marker}); give a new or empty directory")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent))
-    os.chmod(tmp, 0o777 & ~_umask())
+    _check_replaceable(path, marker, allowed)
+    make_dirs(path.parent, path)
+    with _directory_lock(path):
+        _remove_stale(path)
+        try:
+            tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".part",
+                                        dir=path.parent))
+        except OSError as exc:
+            raise InputError(path, f"cannot write: {exc.strerror}") from None
+        os.chmod(tmp, 0o777 & ~_umask())
+        try:
+            yield tmp
+            _check_replaceable(path, marker, allowed)   # nothing new appeared meanwhile
+            old = None
+            if path.exists():
+                old = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".old",
+                                            dir=path.parent))
+                os.replace(path, old / "previous")
+            os.replace(tmp, path)
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
+        finally:
+            if tmp.exists():
+                shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _check_replaceable(path: Path, marker: str, allowed) -> None:
+    if not path.exists():
+        return
+    if not path.is_dir():
+        raise InputError(path, "exists and is not a directory")
+    names = {p.name for p in path.iterdir()}
+    if names and marker not in names:
+        raise InputError(path, f"exists and holds files that are not an earlier output "
+                               f"(no {marker}); give a new or empty directory")
+    if allowed is not None:
+        foreign = sorted(names - set(allowed))
+        if foreign:
+            raise InputError(path, f"holds files that are not this command's output "
+                                   f"({', '.join(foreign[:3])}{', ...' if len(foreign) > 3 else ''}"
+                                   "); they would be lost, so give a new or empty directory")
+
+
+@contextlib.contextmanager
+def _directory_lock(path: Path):
+    """An exclusive, non-blocking lock on ``.NAME.lock`` beside ``path`` (POSIX)."""
     try:
-        yield tmp
-        old = None
-        if path.exists():
-            old = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".old", dir=path.parent))
-            os.replace(path, old / "previous")
-        os.replace(tmp, path)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+        import fcntl
+    except ImportError:     # no advisory locks here: go on without one
+        yield
+        return
+    lock_path = path.parent / f".{path.name}.lock"
+    try:
+        fh = open(lock_path, "a+")
+    except OSError as exc:
+        raise InputError(path, f"cannot write: {exc.strerror}") from None
+    try:
+        try:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            raise InputError(path, "another itensor run is writing this directory; wait for it "
+                                   "or give another one") from None
+        try:
+            yield
+        finally:
+            try:
+                lock_path.unlink()
+            except OSError:
+                pass
+            fcntl.flock(fh, fcntl.LOCK_UN)
     finally:
-        if tmp.exists():
-            shutil.rmtree(tmp, ignore_errors=True)
+        fh.close()
+
+
+def _remove_stale(path: Path) -> None:
+    """Remove ``.NAME.*.part`` / ``.NAME.*.old`` siblings left by a killed run (called with
+    the directory's lock held, so no live run owns them)."""
+    for pattern in (f".{path.name}.*.part", f".{path.name}.*.old"):
+        for stale in path.parent.glob(pattern):
+            if stale.is_dir():
+                shutil.rmtree(stale, ignore_errors=True)
 
 
 def _umask() -> int:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .io import write_json, write_mesh, write_ply_points
+from .io import atomic_path, write_json, write_mesh, write_ply_points
 
 
 @dataclass
@@ -30,6 +30,19 @@ class Prediction:
     score: float
     pose: np.ndarray
     point_index: int = -1
+
+    def __post_init__(self):   # plain NumPy arrays and numbers, whatever made them
+        self.position = np.array(self.position, dtype=np.float64).reshape(3)
+        self.pose = np.array(self.pose, dtype=np.float64).reshape(4, 4)
+        self.orientation_index = int(self.orientation_index)
+        self.angle = float(self.angle)
+        self.score = float(self.score)
+        self.point_index = int(self.point_index)
+
+    def __repr__(self) -> str:
+        x, y, z = self.position
+        return (f"Prediction(score={self.score:.3f}, position=({x:.3f}, {y:.3f}, {z:.3f}), "
+                f"angle={np.degrees(self.angle):.0f} deg)")
 
     def to_dict(self) -> dict:
         return {"position": [float(v) for v in self.position],
@@ -102,9 +115,98 @@ def colormap(values: np.ndarray, vmin: float = 0.0, vmax: float = 1.0) -> np.nda
     return rgb.round().astype(np.uint8)
 
 
+def heat_properties(detection) -> dict:
+    """The heat map's vertex properties, under the names viewers show: ``quality`` (MeshLab's
+    per-vertex quality) and ``scalar_score`` (CloudCompare's scalar fields) both hold the score
+    (0: nothing accepted near); ``scalar_accepted`` the accepted orientations at the point."""
+    return {"quality": detection.heat, "scalar_score": detection.heat,
+            "scalar_accepted": detection.accepted_count}
+
+
+OBJECT_COLOR = (230, 60, 40, 255)
+
+#: every name a detection's output directory may hold (``Detection.save``, ``itensor view``)
+OUTPUT_NAMES = ("predictions.json", "heatmap.ply", "predictions.glb", "top", "render.png",
+                "index.html", "predictions_input_frame.json", "heatmap_input_frame.ply",
+                "top_input_frame", "scene.ply", "scene_input_frame.ply")
+
+
+def heat_colors(detection) -> np.ndarray:
+    """(N, 3) uint8 heat-map colours of the scene points: the ramp from the threshold to 1,
+    grey where nothing was accepted near."""
+    lo = detection.threshold if detection.threshold < 1 else 0.0
+    return colormap(np.where(detection.heat > 0, detection.heat, 0), vmin=lo, vmax=1.0)
+
+
+def posed_objects(detection) -> list:
+    """(vertices, faces or None) of the query object at each top prediction, best first."""
+    tensor = detection.tensor
+    faces = tensor.query_faces if tensor.query_is_mesh else None
+    return [(tensor.query_vertices @ p.pose[:3, :3].T + p.pose[:3, 3], faces)
+            for p in detection.predictions]
+
+
+def result_scene(detection):
+    """A ``trimesh.Scene`` of the heat-map points and the posed query objects."""
+    import trimesh
+
+    colors = np.column_stack([heat_colors(detection), np.full(len(detection.scene), 255,
+                                                               np.uint8)])
+    out = trimesh.Scene()
+    out.add_geometry(trimesh.PointCloud(detection.scene.points, colors=colors),
+                     node_name="heatmap", geom_name="heatmap")
+    for rank, (v, f) in enumerate(posed_objects(detection), 1):
+        if f is None:
+            geom = trimesh.PointCloud(v, colors=np.tile(OBJECT_COLOR, (len(v), 1)))
+        else:
+            geom = trimesh.Trimesh(v, f, process=False)
+            geom.visual.face_colors = OBJECT_COLOR
+        out.add_geometry(geom, node_name=f"top_{rank:02d}", geom_name=f"top_{rank:02d}")
+    return out
+
+
+def result_open3d(detection) -> list:
+    """Open3D geometries: the heat-map cloud, then the posed query objects."""
+    try:
+        import open3d as o3d
+    except ImportError:
+        raise ImportError("to_open3d() needs Open3D: pip install "
+                          "'interaction-tensor[open3d]'") from None
+    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(detection.scene.points))
+    cloud.colors = o3d.utility.Vector3dVector(heat_colors(detection) / 255.0)
+    cloud.normals = o3d.utility.Vector3dVector(detection.scene.normals)
+    out = [cloud]
+    rgb = np.asarray(OBJECT_COLOR[:3]) / 255.0
+    for v, f in posed_objects(detection):
+        if f is None:
+            geom = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(v))
+            geom.paint_uniform_color(rgb)
+        else:
+            geom = o3d.geometry.TriangleMesh(o3d.utility.Vector3dVector(v),
+                                             o3d.utility.Vector3iVector(np.asarray(f, np.int32)))
+            geom.compute_vertex_normals()
+            geom.paint_uniform_color(rgb)
+        out.append(geom)
+    return out
+
+
+def write_glb(detection, path) -> None:
+    """``predictions.glb``: heat-map points and posed objects in one binary glTF, atomically.
+
+    glTF is +Y up; the scene is turned so that the library's +Z up stays up in viewers.
+    """
+    import trimesh
+
+    scene = result_scene(detection)
+    scene.apply_transform(trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(trimesh.exchange.gltf.export_glb(scene))
+
+
 def export(detection, outdir, scene_name: str | None = None,
            descriptor_name: str | None = None) -> dict:
-    """Write ``predictions.json``, ``heatmap.ply`` and ``top/`` into ``outdir``.
+    """Write ``predictions.json``, ``heatmap.ply``, ``predictions.glb`` and ``top/`` into
+    ``outdir``.
 
     Every file is written atomically. Returns the JSON document written.
     """
@@ -132,18 +234,14 @@ def export(detection, outdir, scene_name: str | None = None,
         "stats": det.stats,
     }
     # heat map: heat in [threshold, 1] mapped onto the colour ramp
-    lo = det.threshold if det.threshold < 1 else 0.0
-    colors = colormap(np.where(det.heat > 0, det.heat, 0), vmin=lo, vmax=1.0)
-    write_ply_points(outdir / "heatmap.ply", det.scene.points, colors=colors,
-                     score=det.heat, accepted=det.accepted_count)
+    write_ply_points(outdir / "heatmap.ply", det.scene.points, colors=heat_colors(det),
+                     **heat_properties(det))
     top = outdir / "top"
     top.mkdir(exist_ok=True)
     for old in top.glob("top_*.ply"):
         old.unlink()
-    for rank, p in enumerate(det.predictions, 1):
-        v = tensor.query_vertices @ p.pose[:3, :3].T + p.pose[:3, 3]
-        write_mesh(top / f"top_{rank:02d}.ply", v,
-                   tensor.query_faces if tensor.query_is_mesh else None,
-                   color=(230, 60, 40, 255))
+    for rank, (v, f) in enumerate(posed_objects(det), 1):
+        write_mesh(top / f"top_{rank:02d}.ply", v, f, color=OBJECT_COLOR)
+    write_glb(det, outdir / "predictions.glb")
     write_json(outdir / "predictions.json", doc)
     return doc

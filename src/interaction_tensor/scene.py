@@ -27,6 +27,10 @@ class Scene:
     spacing : float, mean distance (m) between neighbouring points
     source : str, where the scene came from
     sampled : bool, True when the points were sampled from a mesh
+    captured : bool, True for captured data (an RGB-D frame, a scan): detection then defaults
+        to the ``gaussian`` criterion (see :meth:`DetectSettings.for_scene`)
+    report : for captured data, the :class:`~interaction_tensor.realdata.RealSceneReport` of
+        its cleaning and alignment (the transform from the input frame); else None
     """
 
     points: np.ndarray
@@ -34,6 +38,8 @@ class Scene:
     spacing: float
     source: str = "<array>"
     sampled: bool = False
+    captured: bool = False
+    report: object = field(default=None, repr=False)
     _tree: cKDTree | None = field(default=None, repr=False)
     _grid: object = field(default=None, repr=False)
 
@@ -80,4 +86,5 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
     else:
         length = np.linalg.norm(normals, axis=1, keepdims=True)
         normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
-    return Scene(points, normals, mean_spacing(points, tree), geometry.source, False, tree)
+    return Scene(points, normals, mean_spacing(points, tree), geometry.source, False,
+                 _tree=tree)

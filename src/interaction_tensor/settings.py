@@ -8,7 +8,7 @@ Mayol-Cuevas), ``code`` the authors' public implementation as summarised in
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, fields
+from dataclasses import asdict, dataclass, fields, replace
 
 from .errors import SettingsError
 
@@ -16,6 +16,9 @@ CRITERIA = ("paper", "gaussian")
 KEYPOINT_SETS = ("weighted", "uniform")
 BACKENDS = ("auto", "numba", "numpy", "torch")
 KEYPOINT_ORDERS = ("adaptive", "weight")
+#: Smallest sampling spacing (m): finer sampling grows memory as 1 / spacing^2 (a 1e-6 m
+#: spacing asked for gigabytes before any check), and no scan resolves below a millimetre.
+MIN_SPACING = 1e-3
 
 
 def _check(cond: bool, message: str) -> None:
@@ -73,7 +76,9 @@ class TrainSettings:
         _check(self.clearance_points >= 0, "clearance_points must be non-negative")
         _check(self.clearance_max > 0, "clearance_max must be positive (metres)")
         _check(0 <= self.clearance_limit <= 1, "clearance_limit must be in [0, 1]")
-        _check(self.scene_spacing > 0, "scene_spacing must be positive (metres)")
+        _check(math.isfinite(self.scene_spacing) and MIN_SPACING <= self.scene_spacing <= 1.0,
+               f"scene_spacing must be between {MIN_SPACING} and 1 metre (samples cost "
+               "memory as 1 / spacing^2), got {self.scene_spacing}")
         _check(self.crop_factor >= 1.0, "crop_factor must be at least 1")
         _check(self.n_keypoints >= 8, "n_keypoints must be at least 8")
         _check(self.vectors in ("surface", "points"), "vectors must be 'surface' or 'points'")
@@ -103,7 +108,10 @@ class DetectSettings:
     normal_tolerance_deg: float = 15.0
     oriented_normals: bool = False
     #: ``paper``: eq. 5 angle and magnitude tests; ``gaussian``: the authors' code criterion.
-    criterion: str = "paper"
+    #: None: by the kind of scene, ``gaussian`` for captured data (RGB-D frames and scans,
+    #: whose depth noise the paper criterion's tight tests on short vectors do not tolerate),
+    #: ``paper`` for meshes and clouds (see :meth:`for_scene`).
+    criterion: str | None = None
     #: Paper criterion: theta_max = pi / 18 and c = 5 (paper, section 3.2).
     theta_max: float = math.pi / 18
     c: float = 5.0
@@ -169,7 +177,8 @@ class DetectSettings:
         _check(0 < self.sample_fraction <= 1, "sample_fraction must be in (0, 1]")
         _check(self.n_orientations >= 1, "n_orientations must be at least 1")
         _check(0 <= self.normal_tolerance_deg <= 180, "normal_tolerance_deg must be in [0, 180]")
-        _check(self.criterion in CRITERIA, f"criterion must be one of {CRITERIA}")
+        _check(self.criterion is None or self.criterion in CRITERIA,
+               f"criterion must be one of {CRITERIA} (or None: by the kind of scene)")
         _check(self.keypoints in KEYPOINT_SETS, f"keypoints must be one of {KEYPOINT_SETS}")
         _check(self.theta_max > 0 and self.c > 0 and self.gaussian_a > 0,
                "theta_max, c and gaussian_a must be positive")
@@ -181,8 +190,10 @@ class DetectSettings:
         _check(self.clearance_max_violations is None or 0 <= self.clearance_max_violations <= 1,
                "clearance_max_violations must be in [0, 1]")
         _check(self.nms_radius is None or self.nms_radius >= 0, "nms_radius must be >= 0")
-        _check(self.scene_spacing is None or self.scene_spacing > 0,
-               "scene_spacing must be positive (metres)")
+        _check(self.scene_spacing is None or (math.isfinite(self.scene_spacing) and
+                                              MIN_SPACING <= self.scene_spacing <= 1.0),
+               f"scene_spacing must be between {MIN_SPACING} and 1 metre (samples cost "
+               f"memory as 1 / spacing^2), got {self.scene_spacing}")
         _check(self.backend in BACKENDS, f"backend must be one of {BACKENDS}")
         _check(self.keypoint_order in KEYPOINT_ORDERS,
                f"keypoint_order must be one of {KEYPOINT_ORDERS}")
@@ -192,3 +203,11 @@ class DetectSettings:
 
     def to_dict(self) -> dict:
         return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    def for_scene(self, scene) -> "DetectSettings":
+        """These settings with the defaults that depend on the scene filled in: the criterion
+        (``gaussian`` for a captured scene, ``scene.captured``; else ``paper``)."""
+        if self.criterion is not None:
+            return self
+        return replace(self, criterion="gaussian" if getattr(scene, "captured", False)
+                       else "paper")

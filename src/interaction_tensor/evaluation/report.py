@@ -6,16 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .runner import AFFORDANCES, METHODS, PAPER, machine, write_csv, write_json
-
-
-def _mpl():
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
+from .common import AFFORDANCES, METHODS, PAPER, machine, write_csv, write_json
 
 
 def _fmt(v) -> str:
@@ -213,18 +204,52 @@ def write_all(res, out: Path) -> None:
 
 
 def sampling_plot(samp: list[dict], path: Path) -> None:
-    plt = _mpl()
-    rows = [r for r in samp]
-    x = np.arange(len(rows))
-    fig, ax = plt.subplots(figsize=(7, 3.6), dpi=110)
-    ax.bar(x - 0.2, [r["weighted_mean"] for r in rows], 0.4, label="weight-driven")
-    ax.bar(x + 0.2, [r["uniform_mean"] for r in rows], 0.4, label="uniform")
-    ax.set_xticks(x, [r["affordance"] for r in rows])
-    ax.set_ylabel("keypoint comparisons to accept")
-    ax.set_title("Comparisons needed to reach the acceptance threshold (mean)")
-    ax.axhline(512, color="grey", lw=0.8, ls=":")
-    ax.legend(frameon=False)
-    fig.tight_layout()
+    """A bar chart (Pillow, no plotting library) of the mean keypoint comparisons needed to
+    accept, weight-driven beside uniform keypoints, per affordance; 512 dotted."""
+    from PIL import Image, ImageDraw, ImageFont
+
+    width, height = 770, 400
+    left, right, top, bottom = 70, 20, 40, 60
+    img = Image.new("RGB", (width, height), "white")
+    draw = ImageDraw.Draw(img)
+    try:
+        font = ImageFont.load_default(size=13)
+    except TypeError:       # Pillow < 10.1
+        font = ImageFont.load_default()
+    values = [v for r in samp for v in (r["weighted_mean"], r["uniform_mean"])
+              if v is not None and np.isfinite(v)]
+    vmax = max([512.0, *values]) * 1.05
+    plot_h = height - top - bottom
+
+    def y_of(v: float) -> float:
+        return top + plot_h * (1 - v / vmax)
+
+    draw.text((left, 10), "Keypoint comparisons needed to reach the acceptance threshold (mean)",
+              fill="black", font=font)
+    for tick in range(0, int(vmax) + 1, 128):
+        y = y_of(tick)
+        draw.line([(left - 4, y), (width - right, y)], fill=(225, 225, 225))
+        draw.text((left - 8, y), str(tick), fill="black", font=font, anchor="rm")
+    y512 = y_of(512)
+    for x in range(left, width - right, 8):
+        draw.line([(x, y512), (x + 3, y512)], fill="grey")
+    colours = {"weight-driven": (31, 119, 180), "uniform": (255, 127, 14)}
+    slot = (width - left - right) / max(len(samp), 1)
+    for i, r in enumerate(samp):
+        x0 = left + i * slot + slot * 0.1
+        bar = slot * 0.4
+        for j, (key, colour) in enumerate(zip(("weighted_mean", "uniform_mean"),
+                                              colours.values())):
+            v = r[key]
+            if v is None or not np.isfinite(v):
+                continue
+            draw.rectangle([x0 + j * bar, y_of(v), x0 + (j + 1) * bar - 2, y_of(0)], fill=colour)
+        draw.text((x0 + bar, height - bottom + 8), str(r["affordance"]), fill="black",
+                  font=font, anchor="mt")
+    draw.line([(left, top), (left, y_of(0)), (width - right, y_of(0))], fill="black")
+    lx = width - right - 150
+    for k, (name, colour) in enumerate(colours.items()):
+        draw.rectangle([lx, top + 4 + 18 * k, lx + 12, top + 16 + 18 * k], fill=colour)
+        draw.text((lx + 18, top + 10 + 18 * k), name, fill="black", font=font, anchor="lm")
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
+    img.save(path)

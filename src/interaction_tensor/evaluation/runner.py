@@ -33,9 +33,6 @@ Protocol (after the paper's human-marker protocol, section 4.2):
 
 from __future__ import annotations
 
-import csv
-import json
-import platform
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -44,15 +41,7 @@ import numpy as np
 
 from ..errors import InputError
 
-METHODS = ("iT-weighted", "iT-uniform", "Naive", "BS")
-AFFORDANCES = ("placing", "sitting", "filling", "riding", "hanging")
-#: The paper's Table 1 (accuracy, F-score), for the report.
-PAPER = {"placing": {"iT": (96.92, 98.44), "Naive": (3.08, 5.97), "BS": (3.08, 5.97)},
-         "sitting": {"iT": (64.62, 78.50), "Naive": (64.62, 78.50), "BS": (35.38, 52.27)},
-         "filling": {"iT": (100, 100), "Naive": (100, 100), "BS": (100, 100)},
-         "riding": {"iT": (92.31, 96.00), "Naive": (92.31, 96.00), "BS": (7.69, 14.29)},
-         "hanging": {"iT": (70.77, 82.88), "Naive": (29.23, 45.24), "BS": (70.77, 82.88)},
-         "average": {"iT": (84.92, 91.17), "Naive": (57.85, 64.14), "BS": (43.38, 51.08)}}
+from .common import AFFORDANCES, METHODS  # noqa: F401 (METHODS: re-exported)
 
 
 @dataclass
@@ -323,36 +312,3 @@ def metrics(judgements, methods=METHODS, runs=()) -> list[dict]:
                          **{k: int(sum(r[k] for r in per))
                             for k in ("tp", "fp", "tn", "fn", "runs", "with_accepted")}})
     return rows
-
-
-def machine() -> str:
-    import os
-
-    return (f"{platform.system()} {platform.machine()}, {os.cpu_count()} CPU cores, "
-            f"Python {platform.python_version()}")
-
-
-def _json_default(o):
-    if isinstance(o, np.generic):
-        return o.item()
-    if isinstance(o, Path):
-        return str(o)
-    raise TypeError(type(o))
-
-
-def write_csv(path: Path, rows: list[dict], columns: list[str]) -> None:
-    from ..io import atomic_path
-
-    with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
-        w = csv.DictWriter(fh, columns, extrasaction="ignore")
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: (f"{r[k]:.2f}" if isinstance(r.get(k), float) else r.get(k))
-                        for k in columns})
-
-
-def write_json(path: Path, obj) -> None:
-    from ..io import atomic_path
-
-    with atomic_path(path) as tmp:
-        Path(tmp).write_text(json.dumps(obj, indent=1, default=_json_default))

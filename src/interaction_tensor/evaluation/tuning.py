@@ -221,7 +221,7 @@ def write(res: TuneResult, out_dir) -> None:
     """``tuning_pairs.csv`` (every judged pair), ``tuning.json`` (runs, curves, choice) and
     ``tuning.md`` (the chosen thresholds and their curves around them)."""
     from ..io import atomic_dir
-    from .runner import write_csv, write_json
+    from .common import write_csv, write_json
 
     with atomic_dir(out_dir, "tuning.json") as out:
         write_csv(out / "tuning_pairs.csv", res.rows,

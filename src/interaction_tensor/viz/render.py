@@ -23,54 +23,13 @@ PANEL = (640, 480)
 
 # --------------------------------------------------------------------------- reading
 def read_ply_vertices(path) -> dict:
-    """Vertex properties of a PLY file as ``name -> (N,) array`` (binary or ASCII).
+    """Vertex properties of a PLY file as ``name -> (N,) array`` (the library's PLY reader)."""
+    from ..readers import read_ply
 
-    Only the vertex element is read (faces, if any, come after it and are ignored).
-    """
     path = Path(path)
     if not path.is_file():
         raise InputError(path, "not found")
-    types = {"char": "i1", "uchar": "u1", "int8": "i1", "uint8": "u1", "short": "i2",
-             "ushort": "u2", "int16": "i2", "uint16": "u2", "int": "i4", "uint": "u4",
-             "int32": "i4", "uint32": "u4", "float": "f4", "float32": "f4",
-             "double": "f8", "float64": "f8"}
-    with open(path, "rb") as fh:
-        if fh.readline().strip() != b"ply":
-            raise InputError(path, "not a PLY file")
-        fmt, count, props, in_vertex, before = None, 0, [], False, False
-        while True:
-            line = fh.readline()
-            if not line:
-                raise InputError(path, "PLY header has no end_header")
-            words = line.decode("ascii", "replace").split()
-            if not words:
-                continue
-            if words[0] == "format":
-                fmt = words[1]
-            elif words[0] == "element":
-                in_vertex = words[1] == "vertex"
-                if in_vertex:
-                    count = int(words[2])
-                elif count == 0:
-                    before = True
-            elif words[0] == "property" and in_vertex:
-                if words[1] == "list":
-                    raise InputError(path, "list properties on vertices are not supported")
-                props.append((words[2], types.get(words[1], "f4")))
-            elif words[0] == "end_header":
-                break
-        if before:
-            raise InputError(path, "vertex element must come first")
-        if fmt == "ascii":
-            data = np.loadtxt(fh, max_rows=count, ndmin=2)
-            return {name: data[:, i] for i, (name, _) in enumerate(props)}
-        order = "<" if fmt == "binary_little_endian" else ">"
-        dtype = np.dtype([(name, order + t) for name, t in props])
-        raw = fh.read(dtype.itemsize * count)
-    if len(raw) < dtype.itemsize * count:
-        raise InputError(path, "file is truncated")
-    arr = np.frombuffer(raw, dtype=dtype, count=count)
-    return {name: arr[name] for name, _ in props}
+    return read_ply(path)["vertex"]
 
 
 @dataclass
@@ -120,7 +79,8 @@ def load_outdir(outdir, top_k: int | None = None) -> Outdir:
         raise InputError(outdir / "heatmap.ply", "has no x, y, z vertex properties") from None
     if len(points) == 0 or not np.isfinite(points).all():
         raise InputError(outdir / "heatmap.ply", "is empty or has NaN coordinates")
-    score = np.asarray(props.get("score", np.zeros(len(points))), float)
+    score = next((np.asarray(props[k], float) for k in ("quality", "scalar_score", "score")
+                  if k in props), np.zeros(len(points)))
     threshold = float(doc.get("parameters", {}).get("threshold_used")
                       or doc.get("stats", {}).get("threshold") or 0.0)
     if top_k is not None:

@@ -1,0 +1,143 @@
+"""Descriptor files are validated on load: a tampered file is refused naming the field, never
+used, never a traceback, and nothing is loaded with pickle."""
+
+from __future__ import annotations
+
+import io
+import json
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import interaction_tensor as it
+from interaction_tensor.descriptor import _ARRAYS
+
+from conftest import corner_example
+
+
+@pytest.fixture(scope="module")
+def real(tmp_path_factory):
+    """A real descriptor's header and arrays."""
+    query, scene_object = corner_example()
+    t = it.InteractionTensor.fit(query, scene_object, "corner",
+                                 it.TrainSettings(query_points=800, seed=1))
+    path = tmp_path_factory.mktemp("desc") / "c.npz"
+    t.save(path)
+    with np.load(path, allow_pickle=False) as data:
+        arrays = {k: data[k] for k in data.files}
+    header = json.loads(arrays.pop("header").tobytes().decode())
+    return header, arrays
+
+
+def _write(path, header, arrays):
+    buf = io.BytesIO()
+    np.savez(buf, header=np.frombuffer(json.dumps(header).encode(), np.uint8), **arrays)
+    path.write_bytes(buf.getvalue())
+    return path
+
+
+def _refused(path, field):
+    with pytest.raises(it.InputError) as info:
+        it.InteractionTensor.load(path)
+    text = str(info.value)
+    assert str(path) in text and f"'{field}'" in text and "\n" not in text, text
+    assert "allow_pickle" not in text
+
+
+ARRAY_TAMPERING = {
+    "nan": lambda a: np.where(np.arange(a.size).reshape(a.shape) == 0, np.nan, a),
+    "inf": lambda a: np.full(a.shape, np.inf),
+    "shape": lambda a: a.reshape(-1)[: max(a.size - 1, 1)].reshape(-1, 1)
+    if a.size > 1 else np.zeros((2, 2)),
+    "strings": lambda a: np.array(["x"] * max(a.size, 1)),
+    "empty": lambda a: a[:0],
+    "drop": None,
+}
+
+
+@settings(max_examples=60, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(name=st.sampled_from(sorted(_ARRAYS)), how=st.sampled_from(sorted(ARRAY_TAMPERING)))
+def test_tampered_arrays_are_refused_naming_the_field(real, tmp_path, name, how):
+    header, arrays = real
+    arrays = dict(arrays)
+    if how == "drop":
+        del arrays[name]
+    else:
+        arrays[name] = ARRAY_TAMPERING[how](arrays[name].astype(float))
+    path = _write(tmp_path / f"{name}-{how}.npz", header, arrays)
+    try:
+        t = it.InteractionTensor.load(path)
+    except it.InputError as exc:
+        text = str(exc)
+        assert str(path) in text and "\n" not in text and "allow_pickle" not in text
+        # the problem is named (a field, or its partner in a count check)
+        assert "descriptor field" in text, text
+        return
+    # accepted only where the change leaves a valid descriptor: an optional list emptied
+    # or dropped (clearance points of format version 1, contact or scene points)
+    assert (how in ("empty", "drop") and name in ("clearance_points", "clearance_radius",
+                                                  "contact_points", "scene_points")) or \
+        (how == "empty" and name == "query_faces"), (name, how)
+    assert np.isfinite(t.weighted.points).all()
+
+
+@pytest.mark.parametrize("field,value", [
+    ("radius", float("nan")), ("radius", -1.0), ("radius", "big"), ("scene_spacing", 1e-6),
+    ("scene_spacing", 0), ("scene_spacing", None), ("vectors", "bogus"),
+    ("clearance_limit", 2.0), ("affordance", ""), ("affordance", 7), ("thresholds", [0.5]),
+    ("meta", "x")])
+def test_tampered_header_fields_are_refused(real, tmp_path, field, value):
+    header, arrays = real
+    path = _write(tmp_path / "h.npz", {**header, field: value}, arrays)
+    _refused(path, field)
+
+
+def test_bad_thresholds_weights_and_faces_are_refused(real, tmp_path):
+    header, arrays = real
+    bad = {**header, "thresholds": {**header["thresholds"], "paper-weighted": float("nan")}}
+    _refused(_write(tmp_path / "t.npz", bad, arrays), "thresholds.paper-weighted")
+    for name, value in (("weighted_weights", -0.5), ("weights", 1e300)):
+        a = dict(arrays)
+        a[name] = a[name].copy()
+        a[name][0] = value
+        _refused(_write(tmp_path / f"{name}.npz", header, a), name)
+    a = dict(arrays)
+    a["affordance_normal"] = np.zeros(3)
+    _refused(_write(tmp_path / "n.npz", header, a), "affordance_normal")
+    a = dict(arrays)
+    a["query_faces"] = a["query_faces"].copy()
+    a["query_faces"][0, 0] = len(a["query_vertices"]) + 5
+    _refused(_write(tmp_path / "f.npz", header, a), "query_faces")
+    a = dict(arrays)
+    a["reference_point"] = a["query_centroid"] + 1e3
+    _refused(_write(tmp_path / "r.npz", header, a), "reference_point")
+
+
+def test_not_descriptors_never_load_and_never_mention_pickle(real, tmp_path):
+    import pickle
+
+    header, arrays = real
+    cases = {"random.npz": bytes(range(256)) * 4,
+             "pickle.npz": pickle.dumps({"header": 1}),
+             "list-header.npz": None}
+    for name, data in cases.items():
+        path = tmp_path / name
+        if data is None:
+            buf = io.BytesIO()
+            np.savez(buf, header=np.frombuffer(b"[1, 2]", np.uint8), **arrays)
+            data = buf.getvalue()
+        path.write_bytes(data)
+        with pytest.raises(it.InputError) as info:
+            it.InteractionTensor.load(path)
+        assert "allow_pickle" not in str(info.value) and str(path) in str(info.value)
+    # an object array inside an otherwise plausible file
+    buf = io.BytesIO()
+    np.savez(buf, header=np.frombuffer(json.dumps(header).encode(), np.uint8),
+             **{**arrays, "weights": np.array([{"a": 1}], dtype=object)})
+    (tmp_path / "object.npz").write_bytes(buf.getvalue())
+    with pytest.raises(it.InputError, match="never loaded") as info:
+        it.InteractionTensor.load(tmp_path / "object.npz")
+    assert "allow_pickle" not in str(info.value)
