@@ -283,3 +283,63 @@ def test_heatmap_and_glb_open_in_viewers(tmp_path):
     assert isinstance(glb, trimesh.Scene) and len(glb.geometry) == 1 + len(result.predictions)
     doc = json.loads((tmp_path / "predictions.json").read_text())
     assert len(doc["predictions"]) == len(result.predictions) >= 1
+
+
+def _off_text(colors=False):
+    rows = [" ".join(f"{v:.6f}" for v in p) + ("" if not colors else " " + " ".join(
+        str(int(c)) for c in col)) for p, col in zip(V, C)]
+    faces = [f"3 {a} {b} {c}" for a, b, c in F]
+    return ("COFF" if colors else "OFF") + f"\n{len(V)} {len(F)} 0\n" + "\n".join(rows + faces) + "\n"
+
+
+def test_off_with_colours_and_its_counts_checked(tmp_path):
+    (tmp_path / "m.off").write_text(_off_text())
+    g = load_geometry(tmp_path / "m.off")
+    assert _close(g.vertices, V) and np.array_equal(g.faces, F)
+    (tmp_path / "c.off").write_text(_off_text(colors=True))
+    assert np.array_equal(load_geometry(tmp_path / "c.off").colors, C)
+    (tmp_path / "more.off").write_text(_off_text().replace(f"{len(V)} {len(F)} 0", f"{len(V) + 1} {len(F)} 0"))
+    _refused(tmp_path / "more.off", "declares 6 vertices")
+    (tmp_path / "idx.off").write_text(_off_text().replace("3 1 4 2", "3 1 9 2"))
+    _refused(tmp_path / "idx.off", "index vertices that do not exist")
+
+
+def _pcd_text(n_declared=None, width=None):
+    n = len(V) if n_declared is None else n_declared
+    return ("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+            f"WIDTH {n if width is None else width}\nHEIGHT 1\nPOINTS {n}\nDATA ascii\n"
+            + "\n".join(" ".join(f"{v:.6f}" for v in p) for p in V) + "\n")
+
+
+def test_pcd_header_must_match(tmp_path):
+    (tmp_path / "neg.pcd").write_text(_pcd_text(-5, width=-5))
+    _refused(tmp_path / "neg.pcd", "declares -5 points")
+    (tmp_path / "wh.pcd").write_text(_pcd_text(width=9))
+    _refused(tmp_path / "wh.pcd", "WIDTH x HEIGHT")
+    (tmp_path / "more.pcd").write_text(_pcd_text(7))
+    _refused(tmp_path / "more.pcd", "says 7 points, file has 5")
+    header = ("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 5\n"
+              "HEIGHT 1\nPOINTS 5\nDATA binary\n").encode()
+    body = V.astype("<f4").tobytes()
+    (tmp_path / "ok.pcd").write_bytes(header + body)
+    assert _close(load_geometry(tmp_path / "ok.pcd").vertices, V)
+    (tmp_path / "tail.pcd").write_bytes(header + body + b"\0" * 12)
+    _refused(tmp_path / "tail.pcd", "declares 60")
+    (tmp_path / "short.pcd").write_bytes(header + body[:-4])
+    _refused(tmp_path / "short.pcd", "declares 60")
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(kind=st.sampled_from(["off", "pcd", "pts"]), fraction=st.floats(0.0, 1.0))
+def test_cut_off_pcd_and_pts_files_are_never_half_read(tmp_path, kind, fraction):
+    """Cut anywhere before the last row (hypothesis picks the cut): refused, never read."""
+    text = {"off": _off_text(), "pcd": _pcd_text(),
+            "pts": f"{len(V)}\n" + "\n".join(" ".join(f"{v:.6f}" for v in p) for p in V) + "\n"}[kind]
+    raw = text.encode()
+    start = raw.index(b"\n") + 1 if kind != "pcd" else raw.index(b"DATA ascii\n") + 11
+    end = raw.rstrip(b"\n").rindex(b"\n") + 1
+    cut = start + int(fraction * (end - start - 1))
+    path = tmp_path / f"cut.{kind}"
+    path.write_bytes(raw[:cut])
+    with pytest.raises(it.InputError):
+        load_geometry(path)

@@ -11,7 +11,8 @@ suffix                         read by                          holds
 =============================  ===============================  ==========================
 ``.ply``                       plyfile (ASCII, binary LE/BE)    mesh or cloud, normals,
                                                                 colours
-``.obj .off .stl .glb .gltf``  trimesh                          mesh (vertex colours kept)
+``.obj .stl .glb .gltf``       trimesh                          mesh (vertex colours kept)
+``.off``                       here (counts checked)            mesh, colours (COFF)
 ``.pcd``                       here (ascii, binary); Open3D     cloud, normals, colours
                                for binary_compressed
 ``.xyz``                       here                             ``x y z [r g b]``
@@ -260,6 +261,16 @@ def _pcd_geometry(path: Path):
         mode = header["DATA"][0].lower()
     except (KeyError, ValueError, IndexError):
         raise InputError(path, "PCD header lacks FIELDS/SIZE/TYPE/POINTS") from None
+    if not len(names) == len(sizes) == len(types) == len(counts):
+        raise InputError(path, "PCD header's FIELDS, SIZE, TYPE and COUNT differ in length")
+    if n < 0 or min(counts, default=1) < 1:
+        raise InputError(path, f"PCD header declares {n} points or a field COUNT below 1")
+    try:
+        wh = int(header["WIDTH"][0]) * int(header["HEIGHT"][0])
+    except (KeyError, ValueError, IndexError):
+        wh = n
+    if wh != n:
+        raise InputError(path, f"PCD header's WIDTH x HEIGHT ({wh}) is not POINTS ({n})")
     if mode == "binary_compressed":
         try:
             import open3d as o3d
@@ -280,13 +291,19 @@ def _pcd_geometry(path: Path):
                      else (name if name != "_" else f"_pad{len(dtype)}", base))
     dtype = np.dtype(dtype)
     if mode == "binary":
-        if len(raw) - offset < n * dtype.itemsize:
-            raise InputError(path, "PCD binary data is shorter than its header says")
+        if len(raw) - offset != n * dtype.itemsize:
+            raise InputError(path, f"PCD binary data is {len(raw) - offset} bytes, its header "
+                                   f"declares {n * dtype.itemsize}")
         data = np.frombuffer(raw, dtype=dtype, count=n, offset=offset)
     elif mode == "ascii":
-        table = np.loadtxt(raw[offset:].decode("ascii").splitlines(), ndmin=2)
-        if table.shape[0] != n:
-            raise InputError(path, f"PCD header says {n} points, file has {table.shape[0]}")
+        rows = [ln for ln in raw[offset:].decode("ascii", "replace").splitlines() if ln.strip()]
+        if len(rows) != n:
+            raise InputError(path, f"PCD header says {n} points, file has {len(rows)}")
+        widths = {len(ln.split()) for ln in rows}
+        if n and widths != {sum(counts)}:
+            raise InputError(path, f"PCD rows have {sorted(widths)} values, the header "
+                                   f"declares {sum(counts)}")
+        table = np.loadtxt(rows, ndmin=2) if n else np.zeros((0, sum(counts)))
         data = np.zeros(n, dtype=dtype)
         col = 0
         for name, count in zip(dtype.names, counts):
@@ -308,6 +325,53 @@ def _pcd_geometry(path: Path):
             colors = np.column_stack([(packed >> 16) & 255, (packed >> 8) & 255,
                                       packed & 255]).astype(np.uint8)
     return _geometry(pts[keep], None, normals, colors)
+
+
+# --------------------------------------------------------------------------- OFF
+def _off_geometry(path: Path):
+    """OFF / COFF: the header's vertex and face counts must match the data exactly."""
+    lines = []
+    for ln in path.read_bytes().decode("utf-8", "replace").splitlines():
+        ln = ln.split("#", 1)[0].strip()
+        if ln:
+            lines.append(ln)
+    if not lines or lines[0].split()[0] not in ("OFF", "COFF"):
+        raise InputError(path, "not an OFF file (no OFF keyword)")
+    first = lines[0].split()
+    rest = lines[1:]
+    counts_line = first[1:] if len(first) > 1 else (rest.pop(0).split() if rest else [])
+    try:
+        nv, nf = int(counts_line[0]), int(counts_line[1])
+    except (IndexError, ValueError):
+        raise InputError(path, "OFF header has no vertex and face counts") from None
+    if nv < 0 or nf < 0:
+        raise InputError(path, f"OFF header declares {nv} vertices and {nf} faces")
+    if len(rest) != nv + nf:
+        raise InputError(path, f"OFF header declares {nv} vertices and {nf} faces "
+                               f"({nv + nf} rows), the file has {len(rest)} rows")
+    vrows, frows = rest[:nv], rest[nv:]
+    widths = {len(r.split()) for r in vrows}
+    if not widths or min(widths) < 3 or len(widths) > 1:
+        raise InputError(path, f"OFF vertex rows have {sorted(widths)} values; expected 3 "
+                               "(or the same number with colours) on every row")
+    vert = np.loadtxt(vrows, ndmin=2)
+    colors = None
+    if vert.shape[1] in (6, 7):
+        colors = _colors_from(vert[:, 3:6], path, "OFF")
+    faces = None
+    if nf:
+        lists = []
+        for r in frows:
+            vals = r.split()
+            k = int(vals[0]) if vals[0].lstrip("-").isdigit() else -1
+            if k < 3 or len(vals) < k + 1:
+                raise InputError(path, f"OFF face row {r[:40]!r} does not hold its {k} indices")
+            lists.append(np.array(vals[1:k + 1], dtype=np.int64))
+        faces = _triangulate(lists, path)
+        if len(faces) and (faces.min() < 0 or faces.max() >= nv):
+            raise InputError(path, f"OFF faces index vertices that do not exist "
+                                   f"({faces.min()}..{faces.max()} for {nv} vertices)")
+    return _geometry(vert[:, :3], faces, None, colors)
 
 
 # --------------------------------------------------------------------------- text points
@@ -444,7 +508,7 @@ def _e57_geometry(path: Path):
 
 #: suffix -> reader
 READERS = {
-    ".ply": _ply_geometry, ".obj": _trimesh_geometry, ".off": _trimesh_geometry,
+    ".ply": _ply_geometry, ".obj": _trimesh_geometry, ".off": _off_geometry,
     ".stl": _trimesh_geometry, ".glb": _trimesh_geometry, ".gltf": _trimesh_geometry,
     ".xyz": _xyz_geometry, ".xyzn": _xyzn_geometry, ".pts": _pts_geometry,
     ".npy": _npy_geometry, ".pcd": _pcd_geometry, ".las": _las_geometry, ".laz": _las_geometry,
