@@ -194,3 +194,34 @@ def test_degenerate_inputs_and_runaway_work_are_refused_up_front(tensor):
         it.detect(box, tensor, scene_spacing=1e-6)
     with pytest.raises(it.SettingsError, match="between 0.001 and 1 metre"):
         it.load_scene(box, spacing=float("nan"))
+    with pytest.raises(it.SettingsError, match="query_points must be between"):
+        it.train(box, box + [0, 0, 1], "x", query_points=10**9)
+
+
+def test_units_are_checked_and_training_inputs_make_sense(files, tmp_path):
+    from interaction_tensor.examples.procedural import box_part, parts_mesh
+
+    ex = demo.build()
+    # the bowl and the table in millimetres: refused as objects, accepted with the scale
+    bowl_mm, table_mm = ex.query.transformed(np.diag([1000.0] * 3 + [1])), \
+        ex.scene_object.transformed(np.diag([1000.0] * 3 + [1]))
+    with pytest.raises(it.InputError, match="^query: extent .* implausible for an object.*"
+                                            "scale=0.001"):
+        it.train(bowl_mm, table_mm, "x", spacing=SPACING)
+    t = it.train(bowl_mm, table_mm, "x", spacing=SPACING, scale=0.001)
+    assert 0.1 < t.radius < 0.5
+    # a 2 x 2 m room in millimetres is refused as a scene, read with scale=0.001 or scale=1
+    write_mesh(tmp_path / "room_mm.ply", *(lambda g: (g.vertices * 1000, g.faces))(_kitchen()))
+    with pytest.raises(it.InputError, match="room_mm.ply: extent 2000 m is implausible for a "
+                                            "scene.*--scale 0.001"):
+        it.load_scene(tmp_path / "room_mm.ply", spacing=SPACING)
+    assert len(it.load_scene(tmp_path / "room_mm.ply", spacing=SPACING, scale=0.001)) > 1000
+    big = parts_mesh([box_part("hall", (0, 0, 0), (150.0, 150.0, 0.1))])
+    write_mesh(tmp_path / "hall.ply", big.vertices, big.faces)
+    with pytest.raises(it.InputError, match="implausible for a scene"):
+        it.load_scene(tmp_path / "hall.ply", spacing=1.0)
+    assert len(it.load_scene(tmp_path / "hall.ply", spacing=1.0, scale=1)) > 100
+    with pytest.raises(it.InputError, match="same geometry"):
+        it.train(ex.scene_object, ex.scene_object, "x", spacing=SPACING)
+    with pytest.raises(it.InputError, match="reference_point .* beyond the interaction"):
+        it.train(ex.query, ex.scene_object, "x", spacing=SPACING, reference_point=(9, 9, 9))

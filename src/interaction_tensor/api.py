@@ -61,8 +61,8 @@ def load_tensor(tensor):
 
 def train(query, scene_object, affordance: str = "interaction", *, acceptance: str | None = None,
           normal="up", spacing: float = 0.01, query_points: int = 6000,
-          vectors: str = "surface", reference_point=None, seed: int = 0, scale: float = 1.0,
-          up: str = "z", settings: TrainSettings | None = None):
+          vectors: str = "surface", reference_point=None, seed: int = 0,
+          scale: float | None = None, up: str = "z", settings: TrainSettings | None = None):
     """Fit an Interaction Tensor from one example (what ``itensor train`` does).
 
     Parameters
@@ -77,7 +77,8 @@ def train(query, scene_object, affordance: str = "interaction", *, acceptance: s
         3-vector
     spacing : scene-object sample spacing in metres; detection samples mesh scenes the same way
     query_points, vectors, reference_point, seed : see :class:`TrainSettings`
-    scale, up : unit factor to metres and up axis (``"z"`` or ``"y"``) of both inputs
+    scale, up : unit factor to metres and up axis (``"z"`` or ``"y"``) of both inputs; with no
+        scale an object larger than 10 m is refused (millimetres read as metres)
     settings : a full :class:`TrainSettings` instead of ``normal``, ``spacing``,
         ``query_points``, ``vectors`` and ``seed``
 
@@ -88,8 +89,11 @@ def train(query, scene_object, affordance: str = "interaction", *, acceptance: s
 
     if acceptance is not None and acceptance not in ACCEPTANCES:
         raise SettingsError(f"acceptance must be one of {ACCEPTANCES}, got {acceptance!r}")
-    q = as_geometry(query, scale=scale, up=up, name="query")
-    s = as_geometry(scene_object, scale=scale, up=up, name="scene_object")
+    from .io import MAX_OBJECT_EXTENT
+
+    q = as_geometry(query, scale=scale, up=up, name="query", max_extent=MAX_OBJECT_EXTENT)
+    s = as_geometry(scene_object, scale=scale, up=up, name="scene_object",
+                    max_extent=MAX_OBJECT_EXTENT)
     if settings is None:
         settings = TrainSettings(query_points=query_points, scene_spacing=spacing,
                                  affordance_normal=_direction(normal, "normal"), seed=seed,
@@ -106,7 +110,8 @@ def train(query, scene_object, affordance: str = "interaction", *, acceptance: s
 
 def load_scene(scene=None, spacing: float = 0.01, *, scan: bool = False, normals=None,
                color=None, depth=None, intrinsics=None, depth_scale: float | None = None,
-               depth_trunc: float | None = None, scale: float = 1.0, up="auto", seed: int = 0,
+               depth_trunc: float | None = None, scale: float | None = None, up="auto",
+               seed: int = 0,
                max_points: int = 5_000_000, **cleaning):
     """A :class:`Scene` ready for detection, from any input (what ``itensor detect`` does).
 
@@ -121,7 +126,9 @@ def load_scene(scene=None, spacing: float = 0.01, *, scan: bool = False, normals
     normals : (N, 3) normals of an array or point cloud input
     color, depth, intrinsics : an RGB-D frame's images and intrinsics JSON
     depth_scale, depth_trunc : override the intrinsics file's depth units per metre and range
-    scale : unit factor to metres of a file or array
+    scale : unit factor to metres of a file or array; None: metres, and a scene larger than
+        100 m is refused (millimetres or centimetres read as metres; give ``scale=1`` for a
+        really large scene)
     up : up axis of the input: ``"auto"`` (``"z"`` for a plain scene; searched for a scan; the
         camera's -Y for a frame), ``"z"``, ``"y"``, ``"-y"``, ... or a 3-vector (scans, frames)
     seed : seed of mesh sampling and RANSAC
@@ -186,11 +193,13 @@ def load_scene(scene=None, spacing: float = 0.01, *, scan: bool = False, normals
         t = time.perf_counter()
         geometry = as_geometry(scene, normals, scale=scale, up="z", name="scene")
         t_load = time.perf_counter() - t
-        prepared, report = prepare_real_scene(geometry, spacing, None, up=up, scale=scale,
-                                              seed=seed, max_points=max_points, **cleaning)
+        prepared, report = prepare_real_scene(geometry, spacing, None, up=up,
+                                              scale=scale or 1.0, seed=seed,
+                                              max_points=max_points, **cleaning)
         report.steps.insert(0, {"step": "load", "points_before": len(geometry.vertices),
                                 "points_after": len(geometry.vertices),
-                                "parameters": {"scale": scale}, "seconds": round(t_load, 4)})
+                                "parameters": {"scale": scale or 1.0},
+                                "seconds": round(t_load, 4)})
         report.seconds["load"] = t_load
     prepared.report = report
     return prepared

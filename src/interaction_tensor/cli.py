@@ -24,8 +24,10 @@ from .cli_common import (Parser, _axis_or_vector, _fraction, _out_path, _say,  #
 
 
 def _geometry_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--scale", type=float, default=1.0,
-                   help="multiply coordinates by this to get metres (0.001 for mm)")
+    p.add_argument("--scale", type=float, default=None,
+                   help="multiply coordinates by this to get metres (0.001 for mm); default: "
+                        "metres, with files larger than a scene (100 m) or, for train, an "
+                        "object (10 m) refused as probably mm or cm")
     p.add_argument("--up", choices=("z", "y"), default="z", help="the files' up axis")
 
 
@@ -405,8 +407,10 @@ def build_parser() -> argparse.ArgumentParser:
     detection_options(p)
     p.add_argument("--scan", action="store_true",
                    help="the scenes are captured clouds: clean and gravity-align them")
-    p.add_argument("--scale", type=float, default=1.0,
-                   help="multiply coordinates by this to get metres (0.001 for mm)")
+    p.add_argument("--scale", type=float, default=None,
+                   help="multiply coordinates by this to get metres (0.001 for mm); default: "
+                        "metres, with files larger than a scene (100 m) or, for train, an "
+                        "object (10 m) refused as probably mm or cm")
     p.add_argument("--up", type=_axis_or_vector, default="auto",
                    help="up axis of the scenes: auto (z; searched with --scan), z, y, or "
                         "x,y,z with --scan")

@@ -161,6 +161,10 @@ class InteractionTensor:
         say = progress or (lambda _msg: None)
         validate_geometry(query, min_points=4)
         validate_geometry(scene_object, min_points=4)
+        if query.vertices.shape == scene_object.vertices.shape and \
+                np.allclose(query.vertices, scene_object.vertices, atol=1e-9):
+            raise InputError(query.source, "the query and the scene-object are the same "
+                                           "geometry; give the two objects of the interaction")
         timings = {}
         t0 = time.perf_counter()
         normal = np.asarray(settings.affordance_normal, float)
@@ -235,6 +239,13 @@ class InteractionTensor:
                                         settings.contact_tolerance, settings.scene_spacing)
         if reference_point is not None:
             ref = np.asarray(reference_point, dtype=float).reshape(3)
+            if not np.isfinite(ref).all():
+                raise InputError(None, f"reference_point {ref.tolist()} is not finite")
+            far = float(np.linalg.norm(s_pts - ref, axis=1).min())
+            if far > radius:
+                raise InputError(None, f"reference_point {np.round(ref, 3).tolist()} lies "
+                                       f"{far:.2f} m from the scene-object, beyond the "
+                                       f"interaction's radius ({radius:.2f} m)")
 
         # keep the query object itself for posing (clouds subsampled to 30k points)
         qv, qf = query.vertices, (query.faces if query.is_mesh else np.zeros((0, 3), np.int64))

@@ -100,13 +100,18 @@ def validate_geometry(geometry: Geometry, name=None, min_points: int = 4) -> Geo
         area = trimesh.triangles.area(v[f]).sum()
         if not area > 0:
             raise InputError(name, "mesh has zero surface area (degenerate faces)")
-    if extent.max() > 1000:
-        raise InputError(name, f"extent {extent.max():.0f} m is implausible for metres; "
-                               "give the scale to metres (scale=0.001 or --scale 0.001 for millimetres)")
     return geometry
 
 
-def load_geometry(path, scale: float = 1.0, up: str = "z") -> Geometry:
+#: Largest extent (m) a file read without an explicit scale may have: a scene (a room, a
+#: floor of a building) and an object (a query or a scene-object of a training example).
+#: Millimetres or centimetres read as metres exceed these, and are refused with a hint.
+MAX_SCENE_EXTENT = 100.0
+MAX_OBJECT_EXTENT = 10.0
+
+
+def load_geometry(path, scale: float | None = None, up: str = "z",
+                  max_extent: float = MAX_SCENE_EXTENT) -> Geometry:
     """Read a mesh or point cloud file into metres, +Z up.
 
     Parameters
@@ -114,8 +119,12 @@ def load_geometry(path, scale: float = 1.0, up: str = "z") -> Geometry:
     path : str or Path: PLY (ASCII or binary, mesh or cloud), OBJ, OFF, STL, GLB/GLTF, PCD,
         XYZ (x y z [r g b]), XYZN (x y z nx ny nz), PTS, NPY ((N, 3) or (N, 6) with normals),
         LAS/LAZ (extra ``las``), E57 (extra ``e57``). See :mod:`interaction_tensor.readers`.
-    scale : float, multiplies the coordinates (0.001 for a file in millimetres).
+    scale : float, multiplies the coordinates (0.001 for a file in millimetres). None (the
+        default) means metres, checked: a file larger than ``max_extent`` metres is refused,
+        since its units are most likely millimetres or centimetres; give ``scale=1`` to
+        read a large file as metres.
     up : ``"z"`` or ``"y"``, the file's up axis.
+    max_extent : the largest plausible extent (m) without an explicit ``scale``
     """
     from .readers import READERS
 
@@ -134,8 +143,7 @@ def load_geometry(path, scale: float = 1.0, up: str = "z") -> Geometry:
     if suffix not in READERS:
         raise InputError(path, f"unknown format {suffix or '(no extension)'!r}; "
                                f"use one of {', '.join(SUFFIXES)}")
-    if not (np.isfinite(scale) and scale > 0):
-        raise InputError(path, f"scale must be a positive number, got {scale}")
+    _check_scale(scale, path)
     rot = up_rotation(up)
     try:
         with open(path, "rb"):
@@ -153,12 +161,19 @@ def load_geometry(path, scale: float = 1.0, up: str = "z") -> Geometry:
     except Exception as exc:  # parser errors of every kind become one line
         raise InputError(path, f"cannot parse as {suffix[1:].upper()}: {exc}") from None
     geometry.source = str(path)
-    return _to_library_frame(geometry, scale, rot, path)
+    return _to_library_frame(geometry, scale, rot, path, max_extent)
 
 
-def _to_library_frame(geometry: Geometry, scale: float, rot: np.ndarray, name) -> Geometry:
+def _check_scale(scale, name) -> None:
+    if scale is not None and (isinstance(scale, bool) or not isinstance(scale, (int, float))
+                              or not (np.isfinite(scale) and scale > 0)):
+        raise InputError(name, f"scale must be a positive number, got {scale!r}")
+
+
+def _to_library_frame(geometry: Geometry, scale, rot: np.ndarray, name,
+                      max_extent: float | None = None) -> Geometry:
     with np.errstate(invalid="ignore", over="ignore"):   # NaN/inf are reported below
-        geometry.vertices = (geometry.vertices.astype(np.float64) * scale) @ rot.T
+        geometry.vertices = (geometry.vertices.astype(np.float64) * (scale or 1.0)) @ rot.T
         if geometry.normals is not None:
             geometry.normals = geometry.normals.astype(np.float64) @ rot.T
     if geometry.normals is not None and len(geometry.normals) != len(geometry.vertices):
@@ -167,11 +182,20 @@ def _to_library_frame(geometry: Geometry, scale: float, rot: np.ndarray, name) -
     if geometry.colors is not None and len(geometry.colors) != len(geometry.vertices):
         raise InputError(name, f"{len(geometry.colors)} colours for "
                                f"{len(geometry.vertices)} points")
-    return validate_geometry(geometry, name)
+    validate_geometry(geometry, name)
+    if scale is None and max_extent is not None:
+        extent = float(np.ptp(geometry.vertices, axis=0).max())
+        if extent > max_extent:
+            what = "an object" if max_extent <= MAX_OBJECT_EXTENT else "a scene"
+            raise InputError(name, f"extent {extent:.4g} m is implausible for {what} in metres; "
+                                   "give the scale to metres (scale=0.001 or --scale 0.001 for "
+                                   "millimetres, 0.01 for centimetres; scale=1 or --scale 1 "
+                                   "if it really is metres)")
+    return geometry
 
 
-def as_geometry(obj, normals=None, *, scale: float = 1.0, up: str = "z",
-                name: str = "geometry") -> Geometry:
+def as_geometry(obj, normals=None, *, scale: float | None = None, up: str = "z",
+                name: str = "geometry", max_extent: float = MAX_SCENE_EXTENT) -> Geometry:
     """Whatever a user holds, as a :class:`Geometry` in metres, +Z up.
 
     Parameters
@@ -181,22 +205,22 @@ def as_geometry(obj, normals=None, *, scale: float = 1.0, up: str = "z",
         ``PointCloud`` or ``TriangleMesh``, or an ``(N, 3)`` array of points (an ``(N, 6)``
         array is points and normals)
     normals : optional ``(N, 3)`` normals of an array or a point cloud
-    scale, up : as for :func:`load_geometry`: multiply by ``scale``, turn ``up`` to +Z
+    scale, up, max_extent : as for :func:`load_geometry`: multiply by ``scale`` (None:
+        metres, refused beyond ``max_extent``), turn ``up`` to +Z
     name : how errors name the argument (e.g. ``"scene"``)
     """
     if isinstance(obj, (str, os.PathLike)):
-        geometry = load_geometry(obj, scale, up)
+        geometry = load_geometry(obj, scale, up, max_extent)
         if normals is not None:
             geometry.normals = np.asarray(normals, np.float64) @ up_rotation(up).T
             _to_library_frame(geometry, 1.0, np.eye(3), name)
         return geometry
-    if not (np.isfinite(scale) and scale > 0):
-        raise InputError(None, f"{name}: scale must be a positive number, got {scale}")
+    _check_scale(scale, name)
     rot = up_rotation(up)
     geometry = _from_object(obj, name)
     if normals is not None:
         geometry.normals = np.asarray(normals, np.float64)
-    return _to_library_frame(geometry, scale, rot, name)
+    return _to_library_frame(geometry, scale, rot, name, max_extent)
 
 
 def _from_object(obj, name: str) -> Geometry:

@@ -72,7 +72,8 @@ class TrainSettings:
     seed: int = 0
 
     def __post_init__(self):
-        _check(self.query_points >= 100, "query_points must be at least 100")
+        _check(100 <= self.query_points <= 1_000_000,
+               "query_points must be between 100 and 1,000,000 (memory grows with it)")
         _check(self.clearance_points >= 0, "clearance_points must be non-negative")
         _check(self.clearance_max > 0, "clearance_max must be positive (metres)")
         _check(0 <= self.clearance_limit <= 1, "clearance_limit must be in [0, 1]")
