@@ -197,8 +197,10 @@ def _report(args, result, outdir) -> None:
         return
     _say(args, f"scene: {st['scene_points']} points, {st['test_points_sampled']} test points, "
                f"{st['candidates_after_normal_filter']} after the normal filter")
+    rate = st.get("candidates_per_second")
     _say(args, f"scored {st['pairs_scored']} (point, orientation) pairs in "
-               f"{st['seconds']['scoring']:.2f} s ({st['backend']}"
+               f"{st['seconds']['scoring']:.2f} s"
+               f"{f' ({rate:,.0f} candidates/s)' if rate else ''} ({st['backend']}"
                f"{' on ' + st['device'] if st['backend'] == 'torch' else ''}); accepted "
                f"{st['pairs_accepted']}; {st['mean_comparisons_per_decision']:.0f} keypoint "
                "comparisons per decision")
@@ -221,7 +223,8 @@ def summary(result, outdir) -> dict:
             "scene_points": st["scene_points"], "test_points_sampled": st["test_points_sampled"],
             "candidates": st["candidates_after_normal_filter"],
             "pairs_scored": st["pairs_scored"], "pairs_accepted": st["pairs_accepted"],
-            "seconds": st["seconds"],
+            "candidates_per_second": st.get("candidates_per_second"),
+            "pairs_per_second": st.get("pairs_per_second"), "seconds": st["seconds"],
             "predictions": [{"score": p.score, "position": p.position.tolist(),
                              "angle": p.angle} for p in result.predictions]}
 

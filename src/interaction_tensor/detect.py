@@ -386,8 +386,12 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
         "device": device,
         "keypoint_order": settings.keypoint_order,
         "seconds": {k: round(v, 4) for k, v in timings.items()},
-        "test_points_per_second": (float(len(test_idx) / timings["scoring"])
-                                   if timings.get("scoring", 0) > 0 else None),
+        # rates count the work done: candidates (test points past the normal filter, all
+        # orientations decided) and (point, orientation) pairs scored, never sampled points
+        "candidates_per_second": (float(len(cand) / timings["scoring"])
+                                  if timings.get("scoring", 0) > 0 else None),
+        "pairs_per_second": (float(len(pair_point) / timings["scoring"])
+                             if timings.get("scoring", 0) > 0 else None),
     }
     return Detection(scene, tensor, settings, threshold, test_idx, cand, pair_point,
                      pair_orient, pairs, heat, count, predictions, stats, score_acc, viol, rest)

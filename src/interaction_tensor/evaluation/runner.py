@@ -198,7 +198,10 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                     kp = m.split("-")[1]
                     det = it.detect(scene, tensor, it.DetectSettings(
                         sample_fraction=frac, keypoints=kp, top_k=0, seed=st.seed,
-                        neighbour_cache=True))
+                        # the exact neighbour cache pays off for small objects searched
+                        # again and again; for a person (d_o > 1 m) building it took 83 % of
+                        # the time on living-room4 (py-spy), so those search the grid
+                        neighbour_cache=tensor.radius < 1.0))
                     cand = det.candidate_indices
                     point, orient = det.pair_point, det.pair_orientation
                     acc = det.pairs.accepted
