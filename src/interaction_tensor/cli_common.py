@@ -67,7 +67,8 @@ def _show_progress(args) -> bool:
 
 
 def _say(args, *parts) -> None:
-    if not getattr(args, "quiet", False):
+    """Report lines: none with --quiet, and none with --json (stdout is the JSON line)."""
+    if not getattr(args, "quiet", False) and not getattr(args, "json", False):
         print(*parts)
 
 

@@ -208,25 +208,10 @@ def _trimesh_geometry(path: Path):
         raise
     except Exception as exc:  # trimesh's parsers raise every kind of error
         raise InputError(path, f"cannot parse as {path.suffix[1:].upper()}: {exc}") from None
-    if isinstance(loaded, trimesh.Scene):
-        if not loaded.geometry:
-            raise InputError(path, "file holds no geometry")
-        loaded = loaded.to_geometry() if hasattr(loaded, "to_geometry") \
-            else loaded.dump(concatenate=True)
-    if isinstance(loaded, trimesh.Trimesh):
-        faces = np.asarray(loaded.faces, np.int64)
-        colors = None
-        visual = getattr(loaded, "visual", None)
-        if visual is not None and getattr(visual, "kind", None) == "vertex":
-            vc = np.asarray(visual.vertex_colors)
-            if len(vc) == len(loaded.vertices):
-                colors = vc[:, :3]
-        return _geometry(np.asarray(loaded.vertices), faces, None, colors)
-    if isinstance(loaded, trimesh.PointCloud):
-        vc = getattr(loaded, "colors", None)
-        colors = np.asarray(vc)[:, :3] if vc is not None and len(vc) == len(loaded.vertices) \
-            else None
-        return _geometry(np.asarray(loaded.vertices), None, None, colors)
+    if isinstance(loaded, (trimesh.Scene, trimesh.Trimesh, trimesh.PointCloud)):
+        from .io import _from_object    # the one trimesh -> Geometry conversion
+
+        return _from_object(loaded, str(path))
     raise InputError(path, f"unsupported content {type(loaded).__name__}")
 
 

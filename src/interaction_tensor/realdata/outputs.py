@@ -30,7 +30,7 @@ def write_input_frame_outputs(detection, outdir, transform, report: RealSceneRep
 
     Returns the document written to ``predictions_input_frame.json``.
     """
-    from ..predictions import colormap, heat_properties
+    from ..predictions import heat_colors, heat_properties
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)
@@ -40,8 +40,7 @@ def write_input_frame_outputs(detection, outdir, transform, report: RealSceneRep
     scene_pts = det.scene.points
     pts_in = scene_pts @ inv[:3, :3].T + inv[:3, 3]
 
-    lo = det.threshold if det.threshold < 1 else 0.0
-    colors = colormap(np.where(det.heat > 0, det.heat, 0), vmin=lo, vmax=1.0)
+    colors = heat_colors(det)
     write_ply_points(outdir / "heatmap_input_frame.ply", pts_in, colors=colors,
                      **heat_properties(det))
     top = outdir / "top_input_frame"
