@@ -20,11 +20,12 @@ from .errors import InputError, ItensorError, SettingsError
 
 
 from .cli_common import (Parser, _axis_or_vector, _fraction, _out_path, _say,  # noqa: F401
-                         _show_progress, _vector, quiet_option, seed_option)
+                         _show_progress, _spacing, _vector, number, quiet_option,
+                         seed_option)
 
 
 def _geometry_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--scale", type=float, default=None,
+    p.add_argument("--scale", type=number(low=0, low_open=True), default=None,
                    help="multiply coordinates by this to get metres (0.001 for mm); default: "
                         "metres, with files larger than a scene (100 m) or, for train, an "
                         "object (10 m) refused as probably mm or cm")
@@ -33,7 +34,7 @@ def _geometry_options(p: argparse.ArgumentParser) -> None:
 
 def detection_options(p) -> None:
     """The options of :class:`DetectSettings` (``itensor detect`` and ``itensor batch``)."""
-    p.add_argument("--top-k", type=int, default=10, help="predictions kept after suppression")
+    p.add_argument("--top-k", type=number(int, low=0), default=10, help="predictions kept after suppression")
     p.add_argument("--sample-fraction", type=_fraction, default=0.30,
                    help="fraction of scene points used as test points (the paper's 0.3)")
     seed_option(p)
@@ -44,13 +45,13 @@ def detection_options(p) -> None:
                    help="keypoint set compared: weight-driven (paper) or uniform")
     p.add_argument("--threshold", type=_fraction, default=None,
                    help="acceptance threshold on the normalised score (default: calibrated)")
-    p.add_argument("--spacing", type=float, default=None,
+    p.add_argument("--spacing", type=_spacing, default=None,
                    help="mesh sampling spacing in metres (default: the descriptor's)")
-    p.add_argument("--normal-tolerance", type=float, default=15.0,
+    p.add_argument("--normal-tolerance", type=number(low=0, high=180), default=15.0,
                    help="largest angle in degrees between a test normal and N_aff")
     p.add_argument("--oriented-normals", action="store_true",
                    help="trust the sign of scene normals (default: compare the normal line)")
-    p.add_argument("--nms-radius", type=float, default=None,
+    p.add_argument("--nms-radius", type=number(low=0), default=None,
                    help="suppression radius in metres (default: the query object's width)")
     p.add_argument("--no-early-exit", action="store_true",
                    help="compare every keypoint of every candidate")
@@ -85,26 +86,26 @@ def real_scene_options(parser) -> None:
     g.add_argument("--depth", help="depth image (single-channel 16-bit PNG)")
     g.add_argument("--intrinsics", help="JSON with width, height, fx, fy, cx, cy "
                                         "[, depth_scale, depth_trunc]")
-    g.add_argument("--depth-scale", type=float, default=None,
+    g.add_argument("--depth-scale", type=number(low=0, low_open=True), default=None,
                    help="depth units per metre (overrides the JSON; TUM 5000, mm PNG 1000)")
-    g.add_argument("--depth-trunc", type=float, default=None,
+    g.add_argument("--depth-trunc", type=number(low=0, low_open=True), default=None,
                    help="ignore depth beyond this many metres (overrides the JSON)")
     g.add_argument("--scan", action="store_true",
                    help="SCENE is a captured point cloud (or scanned mesh): clean and align it")
     g.add_argument("--no-align", action="store_true",
                    help="skip gravity alignment (a frame's camera is then assumed level)")
-    g.add_argument("--max-tilt", type=float, default=None,
+    g.add_argument("--max-tilt", type=number(low=0, high=90), default=None,
                    help="largest angle (deg) between --up and the supporting plane's normal")
-    g.add_argument("--plane-distance", type=float, default=0.02,
+    g.add_argument("--plane-distance", type=number(low=0, high=1, low_open=True), default=0.02,
                    help="RANSAC inlier distance in metres (default 0.02)")
-    g.add_argument("--voxel-size", type=float, default=None,
+    g.add_argument("--voxel-size", type=number(low=0, high=1), default=None,
                    help="voxel down-sampling edge in metres (default: the descriptor's "
                         "spacing; 0 = none)")
     g.add_argument("--remove-outliers", action=argparse.BooleanOptionalAction, default=True,
                    help="statistical outlier removal (default on)")
-    g.add_argument("--outlier-neighbors", type=int, default=20,
+    g.add_argument("--outlier-neighbors", type=number(int, low=1, high=1000), default=20,
                    help="neighbours of the statistical outlier removal")
-    g.add_argument("--outlier-std", type=float, default=2.0,
+    g.add_argument("--outlier-std", type=number(low=0, low_open=True), default=2.0,
                    help="standard deviations beyond which a point is an outlier")
     g.add_argument("--orient-normals", choices=("camera", "up", "none"), default=None,
                    help="normal orientation (default: camera for a frame, up for a scan)")
@@ -195,6 +196,8 @@ def _report(args, result, outdir) -> None:
     if getattr(args, "json", False):
         print(json.dumps(summary(result, outdir)))
         return
+    for note in st.get("scene_notes", []):
+        _say(args, f"note: {note}")
     _say(args, f"scene: {st['scene_points']} points, {st['test_points_sampled']} test points, "
                f"{st['candidates_after_normal_filter']} after the normal filter")
     rate = st.get("candidates_per_second")
@@ -355,9 +358,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--normal", type=_vector, default=(0.0, 0.0, 1.0),
                    help="expected scene normal N_aff: up (default), down (filling under a tap), "
                         "or x,y,z")
-    p.add_argument("--query-points", type=int, default=6000,
+    p.add_argument("--query-points", type=number(int, low=100, high=1_000_000), default=6000,
                    help="area-uniform samples on the query object")
-    p.add_argument("--spacing", type=float, default=0.01,
+    p.add_argument("--spacing", type=_spacing, default=0.01,
                    help="scene-object sample spacing in metres (detection uses the same)")
     p.add_argument("--vectors", choices=("surface", "points"), default="surface",
                    help="provenance vectors to the sampled surface (default) or to the samples")
@@ -402,7 +405,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "summary.json, index.html; finished pairs in it are skipped")
     p.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
                    help="a running Dask scheduler (default: a local cluster on this machine)")
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", type=number(int, low=0, high=1024), default=None,
                    help="local cluster worker processes (default: the machine's cores); "
                         "0 runs in this process without Dask")
     p.add_argument("--no-render", action="store_true",
@@ -410,7 +413,7 @@ def build_parser() -> argparse.ArgumentParser:
     detection_options(p)
     p.add_argument("--scan", action="store_true",
                    help="the scenes are captured clouds: clean and gravity-align them")
-    p.add_argument("--scale", type=float, default=None,
+    p.add_argument("--scale", type=number(low=0, low_open=True), default=None,
                    help="multiply coordinates by this to get metres (0.001 for mm); default: "
                         "metres, with files larger than a scene (100 m) or, for train, an "
                         "object (10 m) refused as probably mm or cm")
@@ -429,7 +432,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("demo", help="train and detect on built-in procedural data")
     p.add_argument("-o", "--output", default="demo_out", help="output directory")
-    p.add_argument("--top-k", type=int, default=10, help="predictions kept after suppression")
+    p.add_argument("--top-k", type=number(int, low=0), default=10, help="predictions kept after suppression")
     seed_option(p)
     p.add_argument("--render", action="store_true",
                    help="also write render.png: the heat map and the top predictions")

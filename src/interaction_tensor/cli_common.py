@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from pathlib import Path
 
@@ -33,8 +34,41 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
 
+def number(kind=float, *, low=None, high=None, low_open: bool = False, what: str | None = None):
+    """An argparse ``type`` for a finite number in [low, high] (``low_open``: (low, high]).
+    Its errors name the option through argparse (``argument --voxel-size: expected ...``)
+    and say the allowed range, never Python's own text."""
+    if what is None:
+        noun = "an integer" if kind is int else "a number"
+        if low is not None and high is not None:
+            what = f"{noun} in {'(' if low_open else '['}{low:g}, {high:g}]"
+        elif low is not None:
+            what = f"{noun} {'>' if low_open else '>='} {low:g}"
+        else:
+            what = noun
+
+    def parse(text: str):
+        try:
+            value = kind(text)
+        except (TypeError, ValueError):
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}") from None
+        if (not math.isfinite(value) or (low is not None and value < low)
+                or (low_open and value == low) or (high is not None and value > high)):
+            raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
+        return value
+
+    parse.__name__ = what
+    return parse
+
+
+#: Seeds numpy's generators take: non-negative integers below 2**63.
+MAX_SEED = 2 ** 63 - 1
+
+
 def seed_option(p) -> None:
-    p.add_argument("--seed", type=int, default=0, help="seed of every random step")
+    p.add_argument("--seed", type=number(int, low=0, high=MAX_SEED,
+                                         what="a non-negative integer"),
+                   default=0, help="seed of every random step")
 
 
 def quiet_option(p) -> None:
@@ -55,11 +89,10 @@ def _vector(text: str) -> tuple:
     return values
 
 
-def _fraction(text: str) -> float:
-    value = float(text)
-    if not 0 < value <= 1:
-        raise argparse.ArgumentTypeError(f"must be in (0, 1], got {text}")
-    return value
+#: A sampling spacing: the bounds of :data:`settings.MIN_SPACING` and 1 m (samples cost
+#: memory as 1 / spacing^2).
+_spacing = number(low=1e-3, high=1.0, what="metres in [0.001, 1]")
+_fraction = number(low=0, high=1, low_open=True, what="a fraction in (0, 1]")
 
 
 def _show_progress(args) -> bool:

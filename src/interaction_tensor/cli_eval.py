@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .cli_common import _fraction, quiet_option, seed_option
+from .cli_common import _fraction, _spacing, quiet_option, seed_option
 from .errors import InputError
 
 
@@ -151,7 +151,7 @@ def register(sub) -> None:
     q.add_argument("--real-scene-objects", action="store_true",
                    help="also use real scene-objects from --objects (sitting: stool.ply)")
     q.add_argument("--examples", nargs="*", help="only these examples")
-    q.add_argument("--spacing", type=float, default=0.01, help="scene-object spacing (m)")
+    q.add_argument("--spacing", type=_spacing, default=0.01, help="scene-object spacing (m)")
     seed_option(q)
     quiet_option(q)
     q.set_defaults(func=cmd_examples_build)
@@ -183,7 +183,7 @@ def register(sub) -> None:
                         "(default 64)")
     p.add_argument("--max-bs-candidates", type=_positive_int, default=12,
                    help="candidates scored by the BS baseline per (example, scene) (default 12)")
-    p.add_argument("--spacing", type=float, default=0.01, help="sampling spacing (m)")
+    p.add_argument("--spacing", type=_spacing, default=0.01, help="sampling spacing (m)")
     p.add_argument("--no-pictures", action="store_true",
                    help="skip the close-up pictures of the judged poses (faster)")
     p.add_argument("--no-judge-check", action="store_true",

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import time
 
-from .cli_common import quiet_option
+from .cli_common import number, quiet_option
 from .errors import InputError
 
 
@@ -49,7 +49,7 @@ def register(subparsers) -> None:
     """Add ``view``, ``show`` and ``render`` to the ``itensor`` subcommands."""
     p = subparsers.add_parser("view", help="write OUTDIR/index.html, an interactive 3D page")
     p.add_argument("outdir", help="a directory written by 'itensor detect' or 'itensor demo'")
-    p.add_argument("--max-points", type=int, default=200_000,
+    p.add_argument("--max-points", type=number(int, low=1, high=50_000_000), default=200_000,
                    help="scene points kept for the browser (default 200000)")
     quiet_option(p)
     p.set_defaults(func=cmd_view)
@@ -63,6 +63,6 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("render", help="(re)draw OUTDIR/render.png for a detection")
     p.add_argument("outdir", help="a directory written by 'itensor detect' or 'itensor demo'")
     p.add_argument("-o", "--output", default=None, help="PNG to write (default OUTDIR/render.png)")
-    p.add_argument("--top-k", type=int, default=None, help="objects drawn (default: all)")
+    p.add_argument("--top-k", type=number(int, low=0), default=None, help="objects drawn (default: all)")
     quiet_option(p)
     p.set_defaults(func=cmd_render)

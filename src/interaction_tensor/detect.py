@@ -368,6 +368,7 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
     score_acc, viol = clearance if clearance is not None else (pairs.accepted.copy(), None)
     stats = {
         "scene_points": int(len(scene)),
+        "scene_notes": list(getattr(scene, "notes", [])),
         "test_points_sampled": int(len(test_idx)),
         "candidates_after_normal_filter": int(len(cand)),
         "pairs_scored": int(len(pair_point)),

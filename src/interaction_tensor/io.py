@@ -14,7 +14,7 @@ import os
 import shutil
 import stat
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -38,6 +38,7 @@ class Geometry:
     normals : (N, 3) float64 or None, unit normals of a point cloud when the file had them
     colors : (N, 3) uint8 or None
     source : str, where it came from (a path or a description)
+    notes : what the reader changed and the user should know (e.g. points dropped)
     """
 
     vertices: np.ndarray
@@ -45,6 +46,7 @@ class Geometry:
     normals: np.ndarray | None = None
     colors: np.ndarray | None = None
     source: str = "<array>"
+    notes: list = field(default_factory=list)
 
     @property
     def is_mesh(self) -> bool:
@@ -56,7 +58,7 @@ class Geometry:
         v = self.vertices @ m[:3, :3].T + m[:3, 3]
         n = None if self.normals is None else self.normals @ m[:3, :3].T
         return Geometry(v, None if self.faces is None else self.faces.copy(), n,
-                        self.colors, self.source)
+                        self.colors, self.source, list(self.notes))
 
 
 def up_rotation(up: str) -> np.ndarray:

@@ -309,7 +309,12 @@ def _pcd_geometry(path: Path):
             packed = np.ascontiguousarray(data[key]).view(np.uint32)[keep]
             colors = np.column_stack([(packed >> 16) & 255, (packed >> 8) & 255,
                                       packed & 255]).astype(np.uint8)
-    return _geometry(pts[keep], None, normals, colors)
+    geometry = _geometry(pts[keep], None, normals, colors)
+    dropped = int(len(keep) - keep.sum())
+    if dropped:
+        geometry.notes.append(f"{dropped} of {len(keep)} PCD points with NaN or infinite "
+                              "coordinates dropped (PCL marks missing points so)")
+    return geometry
 
 
 # --------------------------------------------------------------------------- OFF

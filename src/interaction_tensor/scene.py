@@ -31,6 +31,7 @@ class Scene:
         to the ``gaussian`` criterion (see :meth:`DetectSettings.for_scene`)
     report : for captured data, the :class:`~interaction_tensor.realdata.RealSceneReport` of
         its cleaning and alignment (the transform from the input frame); else None
+    notes : what loading changed that the user should know (the reader's notes)
     """
 
     points: np.ndarray
@@ -40,6 +41,7 @@ class Scene:
     sampled: bool = False
     captured: bool = False
     report: object = field(default=None, repr=False)
+    notes: list = field(default_factory=list, repr=False)
     _tree: cKDTree | None = field(default=None, repr=False)
     _grid: object = field(default=None, repr=False)
 
@@ -76,8 +78,8 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
             Geometry(geometry.vertices, geometry.faces[face_mask]))
         count = int(np.clip(round(area / spacing ** 2), 100, max_points))
         points, normals = sample_mesh(geometry, count, seed, face_mask=face_mask)
-        scene = Scene(points, normals, spacing, geometry.source, sampled=True)
-        return scene
+        return Scene(points, normals, spacing, geometry.source, sampled=True,
+                     notes=list(geometry.notes))
     points = geometry.vertices
     tree = cKDTree(points)
     normals = geometry.normals
@@ -87,4 +89,4 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
         length = np.linalg.norm(normals, axis=1, keepdims=True)
         normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
     return Scene(points, normals, mean_spacing(points, tree), geometry.source, False,
-                 _tree=tree)
+                 notes=list(geometry.notes), _tree=tree)

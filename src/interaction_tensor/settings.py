@@ -8,6 +8,8 @@ Mayol-Cuevas), ``code`` the authors' public implementation as summarised in
 from __future__ import annotations
 
 import math
+import numbers
+import re
 from dataclasses import asdict, dataclass, fields, replace
 
 from .errors import SettingsError
@@ -19,6 +21,11 @@ KEYPOINT_ORDERS = ("adaptive", "weight")
 #: Smallest sampling spacing (m): finer sampling grows memory as 1 / spacing^2 (a 1e-6 m
 #: spacing asked for gigabytes before any check), and no scan resolves below a millimetre.
 MIN_SPACING = 1e-3
+
+
+def _check_seed(seed) -> None:
+    _check(isinstance(seed, numbers.Integral) and not isinstance(seed, bool)
+           and 0 <= seed < 2 ** 63, f"seed must be an integer in [0, 2**63), got {seed!r}")
 
 
 def _check(cond: bool, message: str) -> None:
@@ -77,6 +84,7 @@ class TrainSettings:
         _check(self.clearance_points >= 0, "clearance_points must be non-negative")
         _check(self.clearance_max > 0, "clearance_max must be positive (metres)")
         _check(0 <= self.clearance_limit <= 1, "clearance_limit must be in [0, 1]")
+        _check_seed(self.seed)
         _check(math.isfinite(self.scene_spacing) and MIN_SPACING <= self.scene_spacing <= 1.0,
                f"scene_spacing must be between {MIN_SPACING} and 1 metre (samples cost "
                "memory as 1 / spacing^2), got {self.scene_spacing}")
@@ -196,6 +204,13 @@ class DetectSettings:
                f"scene_spacing must be between {MIN_SPACING} and 1 metre (samples cost "
                f"memory as 1 / spacing^2), got {self.scene_spacing}")
         _check(self.backend in BACKENDS, f"backend must be one of {BACKENDS}")
+        _check(self.device is None or self.backend == "torch",
+               f"device {self.device!r} applies to the torch backend only "
+               f"(backend is {self.backend!r}; add --backend torch / backend='torch')")
+        _check(self.device is None or isinstance(self.device, str) and bool(
+            re.fullmatch(r"auto|cpu|mps|cuda(:\d+)?", self.device)),
+            f"device must be auto, cpu, mps, cuda or cuda:N, got {self.device!r}")
+        _check_seed(self.seed)
         _check(self.keypoint_order in KEYPOINT_ORDERS,
                f"keypoint_order must be one of {KEYPOINT_ORDERS}")
         _check(self.pilot_pairs >= 1, "pilot_pairs must be at least 1")

@@ -50,6 +50,17 @@ def resolve_device(name: str | None) -> str:
         return "cuda" if torch.cuda.is_available() else "cpu"
     if name.startswith("cuda") and not torch.cuda.is_available():
         raise SettingsError(f"device {name!r} asked for, but PyTorch sees no CUDA device")
+    try:
+        torch.device(name)
+    except (RuntimeError, TypeError, ValueError):
+        raise SettingsError(f"device {name!r} is not a torch device (cpu, cuda, cuda:N, "
+                            f"mps)") from None
+    if name.startswith("cuda:") and int(name[5:]) >= torch.cuda.device_count():
+        raise SettingsError(f"device {name!r} asked for, but PyTorch sees "
+                            f"{torch.cuda.device_count()} CUDA device(s)")
+    if name == "mps" and not (getattr(torch.backends, "mps", None)
+                              and torch.backends.mps.is_available()):
+        raise SettingsError("device 'mps' asked for, but PyTorch sees no MPS device")
     return name
 
 

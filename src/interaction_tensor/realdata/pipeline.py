@@ -3,6 +3,7 @@ wrapped as a Scene, with a report of every step."""
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,6 +18,20 @@ from .cleaning import (estimate_normals_o3d, orient_normals, remove_statistical_
 
 #: Largest scene extent (m) that does not trigger the "wrong units?" warning.
 PLAUSIBLE_EXTENT_M = 30.0
+
+
+def _check_range(name: str, value, low, high, *, low_open: bool = False,
+                 none_ok: bool = False) -> None:
+    """Refuse ``value`` (NaN, infinite, out of [low, high]) naming the parameter."""
+    if value is None and none_ok:
+        return
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise SettingsError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(v) or v < low or v > high or (low_open and v == low):
+        raise SettingsError(f"{name} must be in {'(' if low_open else '['}{low:g}, {high:g}], "
+                            f"got {value!r}")
 
 
 # ============================================================================ pipeline
@@ -131,8 +146,12 @@ def prepare_real_scene(geometry: Geometry, spacing: float = 0.01, camera=None, *
     from ..scene import Scene
     from ..sampling import mean_spacing, mesh_area, sample_mesh
 
-    if not (spacing and spacing > 0):
-        raise SettingsError("spacing must be positive (metres)")
+    _check_range("spacing", spacing, 0.0, math.inf, low_open=True)
+    _check_range("voxel_size", voxel_size, 0.0, 1.0, none_ok=True)
+    _check_range("max_tilt_deg", max_tilt_deg, 0.0, 90.0, none_ok=True)
+    _check_range("plane_distance", plane_distance, 0.0, 1.0, low_open=True)
+    _check_range("outlier_std", outlier_std, 0.0, math.inf, low_open=True)
+    _check_range("outlier_neighbors", outlier_neighbors, 1, 1000)
     kind = kind or ("rgbd" if camera is not None else "scan")
     normals_mode = normals or ("camera" if camera is not None else "up")
     if normals_mode not in ("camera", "up", "none"):
@@ -224,7 +243,7 @@ def prepare_real_scene(geometry: Geometry, spacing: float = 0.01, camera=None, *
     report.colors = colors
     report.seconds["total"] = time.perf_counter() - t_all
     scene = Scene(points, nrm, step, str(geometry.source), sampled=False, captured=True,
-                  _tree=tree)
+                  notes=list(geometry.notes), _tree=tree)
     return scene, report
 
 
