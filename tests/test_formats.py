@@ -343,3 +343,73 @@ def test_cut_off_pcd_and_pts_files_are_never_half_read(tmp_path, kind, fraction)
     path.write_bytes(raw[:cut])
     with pytest.raises(it.InputError):
         load_geometry(path)
+
+
+def _obj_text() -> str:
+    mesh = trimesh.creation.icosphere(1)
+    lines = [f"v {x:.6f} {y:.6f} {z:.6f}" for x, y, z in mesh.vertices]
+    lines += [f"f {a + 1}/{a + 1} {b + 1}//{b + 1} {c + 1}" for a, b, c in mesh.faces]
+    return "# a comment\n" + "\n".join(lines) + "\n"
+
+
+def test_obj_rows_indices_and_polygons(tmp_path):
+    (tmp_path / "ok.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nvn 0 0 1\n"
+                                     "f 1/1/1 2//1 3 4\nf -1 -2 -3\n")
+    g = load_geometry(tmp_path / "ok.obj")
+    assert g.faces.tolist() == [[0, 1, 2], [0, 2, 3], [3, 2, 1]]    # fan, then relative
+    for text, says in (("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0\nf 1 2 3\n", "line 4 'v 0 0'"),
+                       ("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2\n", "line 5 'f 1 2'"),
+                       ("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 9\n", "outside the 4"),
+                       ("v 0 0 0\nv 1 0 0\nv 0 1 0 1 1 1\nv 0 0 1\n", "mixed rows"),
+                       ("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3", "middle of line 5"),
+                       ("v 0 0 0\nv 1 0 nan\nv 0 1 0\nv 0 0 1\n", "line 2")):
+        (tmp_path / "bad.obj").write_text(text)
+        _refused(tmp_path / "bad.obj", says)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(fraction=st.floats(0.0, 1.0))
+def test_a_cut_obj_is_refused_or_read_exactly_as_far_as_it_goes(tmp_path, fraction):
+    """OBJ declares no counts, so a file cut at a line break is a smaller whole file: it must
+    then hold exactly the rows before the cut; cut inside a row, it is refused."""
+    raw = _obj_text().encode()
+    cut = int(fraction * (len(raw) - 1))
+    path = tmp_path / "cut.obj"
+    path.write_bytes(raw[:cut])
+    lines = raw[:cut].decode().split("\n")
+    # the rows before the cut; None when the cut falls inside a v or f row
+    whole = None if lines[-1][:2] in ("v ", "f ") else [ln for ln in lines[:-1]
+                                                        if ln[:2] in ("v ", "f ")]
+    try:
+        g = load_geometry(path)
+    except it.InputError as exc:
+        assert str(exc).startswith(str(path)) and "\n" not in str(exc)
+        return
+    assert whole is not None, "a row cut in the middle was read"
+    full = load_geometry_text(_obj_text(), tmp_path)
+    n_v = sum(ln.startswith("v ") for ln in whole)
+    n_f = sum(ln.startswith("f ") for ln in whole)
+    assert _close(g.vertices, full.vertices[:n_v])
+    assert (0 if g.faces is None else len(g.faces)) == n_f
+    if n_f:
+        assert (g.faces == full.faces[:n_f]).all()
+
+
+def load_geometry_text(text: str, tmp_path):
+    (tmp_path / "whole.obj").write_text(text)
+    return load_geometry(tmp_path / "whole.obj")
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(kind=st.sampled_from(["stl", "stl-ascii", "glb"]), fraction=st.floats(0.0, 0.999))
+def test_cut_stl_and_glb_files_are_refused(tmp_path, kind, fraction):
+    """Binary STL declares its triangle count, ASCII STL ends with endsolid and GLB declares
+    its length: cut anywhere, they are refused in one line naming the file."""
+    mesh = trimesh.creation.icosphere(1)
+    raw = (trimesh.exchange.stl.export_stl_ascii(mesh).encode() if kind == "stl-ascii"
+           else mesh.export(file_type=kind.split("-")[0]))
+    path = tmp_path / f"cut.{kind.split('-')[0]}"
+    path.write_bytes(raw[:int(fraction * len(raw))])
+    with pytest.raises(it.InputError) as exc:
+        load_geometry(path)
+    assert str(exc.value).startswith(str(path)) and "\n" not in str(exc.value)

@@ -156,3 +156,59 @@ def test_winding_number_kernel_matches_the_reference():
     np.testing.assert_allclose(fast, ref, atol=1e-9)
     inside = np.linalg.norm(pts, axis=1) < 0.9                 # well inside the polyhedron
     assert (fast[inside] > 0.99).all() and (fast[np.linalg.norm(pts, axis=1) > 1.01] < 0.01).all()
+
+
+# --------------------------------------------------------------------------- RGB-D frames
+_JSON_VALUES = st.one_of(st.none(), st.booleans(), st.text(max_size=6),
+                         st.floats(allow_nan=True, allow_infinity=True),
+                         st.integers(-10**6, 10**6), st.lists(st.integers(), max_size=3))
+
+
+@hsettings(max_examples=80, deadline=None)
+@given(changes=st.dictionaries(st.sampled_from(["width", "height", "fx", "fy", "cx", "cy",
+                                                "depth_scale", "depth_trunc"]),
+                               _JSON_VALUES, min_size=1, max_size=3),
+       drop=st.sets(st.sampled_from(["width", "fx", "cy"]), max_size=1))
+def test_tampered_intrinsics_are_refused_or_sane(changes, drop, tmp_path_factory):
+    """Any change to the real frame's intrinsics is read as sane numbers or refused in one
+    line naming the file; never a traceback, never NaN, a negative focal length or a
+    principal point outside the image."""
+    import json
+
+    from conftest import shared_file
+    from interaction_tensor.realdata import load_intrinsics
+
+    data = json.loads(shared_file("rgbd/tum_desk/intrinsics.json").read_text())
+    data.update(changes)
+    for key in drop:
+        data.pop(key, None)
+    path = tmp_path_factory.mktemp("intr") / "intrinsics.json"
+    path.write_text(json.dumps(data))
+    try:
+        intr = load_intrinsics(path)
+    except InputError as exc:
+        assert str(exc).startswith(str(path)) and "\n" not in str(exc)
+        return
+    values = [intr.fx, intr.fy, intr.cx, intr.cy, intr.depth_scale, intr.depth_trunc]
+    assert all(np.isfinite(values)) and min(intr.fx, intr.fy, intr.depth_scale,
+                                            intr.depth_trunc) > 0
+    assert intr.width >= 1 and intr.height >= 1
+    assert 0 <= intr.cx <= intr.width and 0 <= intr.cy <= intr.height
+
+
+@hsettings(max_examples=30, deadline=None)
+@given(which=st.sampled_from(["depth.png", "color.png"]), fraction=st.floats(0.0, 0.98),
+       garbage=st.binary(max_size=16))
+def test_cut_or_damaged_frame_images_are_refused(which, fraction, garbage, tmp_path_factory):
+    import shutil
+
+    from conftest import shared_file
+
+    frame = tmp_path_factory.mktemp("frame")
+    for name in ("depth.png", "color.png", "intrinsics.json"):
+        shutil.copy(shared_file(f"rgbd/tum_desk/{name}"), frame / name)
+    raw = (frame / which).read_bytes()
+    (frame / which).write_bytes(raw[:int(fraction * len(raw))] + garbage)
+    with pytest.raises(InputError) as exc:
+        it.load_scene(frame)
+    assert str(frame / which) in str(exc.value) and "\n" not in str(exc.value)

@@ -11,7 +11,9 @@ suffix                         read by                          holds
 =============================  ===============================  ==========================
 ``.ply``                       plyfile (ASCII, binary LE/BE)    mesh or cloud, normals,
                                                                 colours
-``.obj .stl .glb .gltf``       trimesh                          mesh (vertex colours kept)
+``.obj``                       here (rows and indices checked)  mesh or cloud, vertex
+                                                                colours
+``.stl .glb .gltf``            trimesh                          mesh (vertex colours kept)
 ``.off``                       here (counts checked)            mesh, colours (COFF)
 ``.pcd``                       here (ascii, binary); Open3D     cloud, normals, colours
                                for binary_compressed
@@ -29,6 +31,7 @@ suffix                         read by                          holds
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 
 import numpy as np
@@ -144,6 +147,17 @@ def _check_ply_length(path: Path, data) -> None:
                                "header declares")
 
 
+def _fan(flat: np.ndarray, lengths: np.ndarray) -> np.ndarray:
+    """(F, 3) triangle fans of polygons given as their concatenated vertex indices ``flat``
+    and their ``lengths`` (each at least 3)."""
+    starts = np.concatenate([[0], np.cumsum(lengths)[:-1]]).astype(np.int64)
+    per_face = lengths - 2
+    face_of = np.repeat(np.arange(len(lengths)), per_face)
+    k = np.arange(per_face.sum()) - np.repeat(np.cumsum(per_face) - per_face, per_face)
+    s = starts[face_of]
+    return np.column_stack([flat[s], flat[s + k + 1], flat[s + k + 2]])
+
+
 def _triangulate(lists, path) -> np.ndarray:
     """(F, 3) int64 triangles from PLY face lists (fans for polygons)."""
     arr = np.asarray(lists)
@@ -156,13 +170,7 @@ def _triangulate(lists, path) -> np.ndarray:
         if lengths.size and (lengths == lengths[0]).all():
             poly = np.stack(lists).astype(np.int64)
         else:
-            flat = np.concatenate(lists).astype(np.int64)
-            starts = np.concatenate([[0], np.cumsum(lengths)[:-1]])
-            per_face = lengths - 2
-            face_of = np.repeat(np.arange(len(lengths)), per_face)
-            k = np.arange(per_face.sum()) - np.repeat(np.cumsum(per_face) - per_face, per_face)
-            s = starts[face_of]
-            return np.column_stack([flat[s], flat[s + k + 1], flat[s + k + 2]])
+            return _fan(np.concatenate(lists).astype(np.int64), lengths)
     if poly.shape[1] < 3:
         raise InputError(path, "PLY has faces with fewer than 3 vertices")
     if poly.shape[1] == 3:
@@ -196,6 +204,63 @@ def _ply_geometry(path: Path):
     faces = ply["faces"]
     return _geometry(points, faces, None if faces is not None and len(faces) else normals,
                      colors)
+
+
+# --------------------------------------------------------------------------- OBJ
+_OBJ_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_OBJ_VERTEX = re.compile(rf"v(?:[ \t]+{_OBJ_NUMBER}){{3,7}}[ \t]*")
+_OBJ_FACE = re.compile(r"f(?:[ \t]+-?\d+(?:/-?\d*){0,2}){3,}[ \t]*")
+
+
+def _obj_geometry(path: Path):
+    """Wavefront OBJ, read strictly: every ``v`` row x y z [w] or x y z r g b [a], every
+    ``f`` row three or more vertex references (``i``, ``i/t``, ``i//n``, ``i/t/n``, negative
+    ones relative), indices in range, and a last geometry row that is not cut off. Polygons
+    are fanned; ``vt``, ``vn``, ``l``, groups and materials are ignored."""
+    raw = path.read_bytes()
+    text = raw.decode("utf-8", "replace")
+    if "#" in text:
+        text = re.sub(r"#[^\n]*", "", text)
+    lines = np.array(text.splitlines(), dtype=object)
+    head = np.array([ln[:2] for ln in lines], dtype="U2")
+    kind = np.zeros(len(lines), np.int8)
+    kind[(head == "v ") | (head == "v\t")] = 1
+    kind[(head == "f ") | (head == "f\t")] = 2
+    rows = np.flatnonzero(kind)
+    if len(rows) and not raw.endswith((b"\n", b"\r")) and rows[-1] == len(lines) - 1:
+        raise InputError(path, f"OBJ ends in the middle of line {len(lines)} (the file looks "
+                               "cut); re-export it, or end it with a line break if it is whole")
+    blocks = {}
+    for code, pattern, what in ((1, _OBJ_VERTEX, "a vertex needs x y z (or x y z r g b)"),
+                                (2, _OBJ_FACE, "a face needs three or more vertex indices")):
+        idx = np.flatnonzero(kind == code)
+        block = "\n".join(lines[idx].tolist()).replace("\t", " ")
+        bad = re.search(rf"^(?!{pattern.pattern}$).*$", block, re.M) if len(idx) else None
+        if bad:
+            line = int(idx[block.count("\n", 0, bad.start())])
+            raise InputError(path, f"OBJ line {line + 1} {lines[line].strip()[:40]!r}: {what}")
+        blocks[code] = (idx, re.sub(r" +", " ", block))
+    v_idx, v_block = blocks[1]
+    widths = np.char.count(np.array(v_block.split("\n"), dtype=str), " ") if len(v_idx) else []
+    if len(set(np.asarray(widths).tolist())) > 1:
+        raise InputError(path, f"OBJ vertex rows have {sorted(set(widths.tolist()))} values; "
+                               "mixed rows are not supported")
+    table = (np.array(v_block.replace("v", " ").split(), np.float64).reshape(len(v_idx), -1)
+             if len(v_idx) else np.zeros((0, 3)))
+    colors = _colors_from(table[:, 3:6], path, "OBJ") if table.shape[1] >= 6 else None
+    f_idx, f_block = blocks[2]
+    faces = None
+    if len(f_idx):
+        f_block = re.sub(r"/[^ \n]*", "", f_block).strip()
+        lengths = np.char.count(np.array(f_block.split("\n"), dtype=str).astype(str), " ")
+        flat = np.array(f_block.replace("f", " ").split(), np.int64)
+        seen = np.cumsum(kind == 1)[f_idx]               # vertices defined before each face
+        flat = np.where(flat < 0, np.repeat(seen, lengths) + flat, flat - 1)
+        if ((flat < 0) | (flat >= len(table))).any():
+            raise InputError(path, f"OBJ faces refer to vertices outside the {len(table)} "
+                                   "it defines")
+        faces = _fan(flat, lengths)
+    return _geometry(table[:, :3], faces, None, colors)
 
 
 # --------------------------------------------------------------------------- trimesh formats
@@ -498,7 +563,7 @@ def _e57_geometry(path: Path):
 
 #: suffix -> reader
 READERS = {
-    ".ply": _ply_geometry, ".obj": _trimesh_geometry, ".off": _off_geometry,
+    ".ply": _ply_geometry, ".obj": _obj_geometry, ".off": _off_geometry,
     ".stl": _trimesh_geometry, ".glb": _trimesh_geometry, ".gltf": _trimesh_geometry,
     ".xyz": _xyz_geometry, ".xyzn": _xyzn_geometry, ".pts": _pts_geometry,
     ".npy": _npy_geometry, ".pcd": _pcd_geometry, ".las": _las_geometry, ".laz": _las_geometry,
