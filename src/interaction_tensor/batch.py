@@ -287,7 +287,10 @@ def batch(scenes, tensors, outdir, settings: DetectSettings | None = None, *, cl
 
 
 def _safe(name: str) -> str:
-    return "".join(c if c.isalnum() or c in "-_." else "_" for c in name) or "descriptor"
+    """A file name from a descriptor's affordance name (text from a file): letters, digits,
+    ``-_.`` only, no leading dot (no hidden files, no ``..``), at most 64 characters."""
+    safe = "".join(c if c.isalnum() or c in "-_." else "_" for c in name)[:64].lstrip(".")
+    return safe or "descriptor"
 
 
 def _run(jobs, client, scheduler, workers, progress):

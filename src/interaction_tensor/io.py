@@ -11,6 +11,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import re
 import shutil
 import stat
 import tempfile
@@ -429,9 +430,37 @@ def _umask() -> int:
 
 
 def write_json(path, obj) -> None:
-    """Write ``obj`` as indented JSON, atomically."""
-    with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(obj, indent=1) + "\n")
+    """Write ``obj`` as indented JSON, atomically.
+
+    NumPy arrays in ``obj`` are written as one-line JSON lists, a block at a time (floats
+    rounded to 6 decimals), so that a million accepted pairs cost no million Python objects.
+    """
+    arrays = []
+
+    def swap(o):
+        if isinstance(o, np.ndarray):
+            arrays.append(o.ravel())
+            return f"@@itensor-array-{len(arrays) - 1}@@"
+        if isinstance(o, dict):
+            return {k: swap(v) for k, v in o.items()}
+        if isinstance(o, (list, tuple)):
+            return [swap(v) for v in o]
+        return o
+
+    parts = re.split(r'"@@itensor-array-(\d+)@@"', json.dumps(swap(obj), indent=1))
+    with atomic_path(path) as tmp, open(tmp, "w") as fh:
+        for i, part in enumerate(parts):
+            if i % 2 == 0:
+                fh.write(part)
+                continue
+            a = arrays[int(part)]
+            fh.write("[")
+            for s in range(0, len(a), 100_000):
+                block = a[s:s + 100_000]
+                block = np.round(block, 6) if block.dtype.kind == "f" else block
+                fh.write(("," if s else "") + json.dumps(block.tolist())[1:-1])
+            fh.write("]")
+        fh.write("\n")
 
 
 def write_ply_points(path, points, colors=None, normals=None, **scalars) -> None:

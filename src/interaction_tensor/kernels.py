@@ -77,7 +77,8 @@ class Grid:
     ----------
     points, normals : (N, 3) float64 sorted by cell
     order : (N,) int64, original index of each sorted point
-    starts : (C + 1,) int64, points of cell c are ``starts[c]:starts[c + 1]``
+    starts : (C + 1,) int32 (int64 beyond 2**31 points), points of cell c are
+        ``starts[c]:starts[c + 1]``
     seed : (C,) int32, the non-empty cell whose centre is nearest to each cell's centre
     origin : (3,) float64, corner of cell (0, 0, 0)
     cell : float, cell edge (m)
@@ -96,20 +97,39 @@ class Grid:
     cache: object = field(default=None, repr=False, compare=False)
 
 
-def build_grid(points: np.ndarray, normals: np.ndarray, cell: float) -> Grid:
-    """Sort ``points`` into cells of edge ``cell`` (enlarged if the grid would be too big)."""
+def grid_cells(points: np.ndarray, cell: float):
+    """(lin, lo, cell, dims): the linear cell index of each point in the grid of edge
+    ``cell`` (enlarged if the grid would have more than :data:`MAX_CELLS` cells)."""
     lo = points.min(axis=0) - 1e-9
     extent = np.ptp(points, axis=0) + 2e-9
     cell = float(max(cell, (np.prod(extent + cell) / MAX_CELLS) ** (1 / 3), 1e-6))
     dims = np.maximum(np.ceil(extent / cell).astype(np.int64), 1)
     ijk = np.minimum(((points - lo) / cell).astype(np.int64), dims - 1)
     lin = (ijk[:, 0] * dims[1] + ijk[:, 1]) * dims[2] + ijk[:, 2]
+    return lin, lo, cell, dims
+
+
+def build_grid(points: np.ndarray, normals: np.ndarray, cell: float) -> Grid:
+    """Sort ``points`` into cells of edge ``cell`` (enlarged if the grid would be too big).
+
+    Points already in cell order (a :class:`Scene` from :func:`prepare_scene`) are used as
+    they are, not copied: the grid then costs its cell table only."""
+    lin, lo, cell, dims = grid_cells(points, cell)
     order = np.argsort(lin, kind="stable")
+    if np.all(order[1:] > order[:-1]):             # already sorted: share the arrays
+        order = np.arange(len(points))
+        sorted_points, sorted_normals = points, normals
+    else:
+        sorted_points, sorted_normals = points[order], normals[order]
     counts = np.bincount(lin, minlength=int(np.prod(dims)))
-    starts = np.zeros(len(counts) + 1, np.int64)
+    del lin
+    # int32 cell starts when they fit: the dense table is the grid's largest part
+    starts = np.zeros(len(counts) + 1, np.int32 if len(points) < 2 ** 31 else np.int64)
     np.cumsum(counts, out=starts[1:])
-    return Grid(np.ascontiguousarray(points[order]), np.ascontiguousarray(normals[order]),
-                order, starts, _nearest_occupied(counts, dims), lo, cell, dims)
+    seed = _nearest_occupied(counts, dims)
+    del counts
+    return Grid(np.ascontiguousarray(sorted_points), np.ascontiguousarray(sorted_normals),
+                order, starts, seed, lo, cell, dims)
 
 
 def _nearest_occupied(counts: np.ndarray, dims: np.ndarray) -> np.ndarray:
@@ -120,10 +140,15 @@ def _nearest_occupied(counts: np.ndarray, dims: np.ndarray) -> np.ndarray:
     empty = (counts == 0).reshape(tuple(dims))
     if not empty.any():
         return np.arange(len(counts), dtype=np.int32)
-    ind = distance_transform_edt(empty, return_distances=False, return_indices=True)
-    ind = ind.astype(np.int32, copy=False)
-    lin = (ind[0] * int(dims[1]) + ind[1]) * int(dims[2]) + ind[2]
-    return np.ascontiguousarray(lin.ravel(), dtype=np.int32)
+    ind = np.empty((3,) + tuple(int(d) for d in dims), np.int32)   # SciPy fills it in place
+    distance_transform_edt(empty, return_distances=False, return_indices=True, indices=ind)
+    del empty
+    lin = ind[0].ravel()                     # (i * ny + j) * nz + k, in place, in int32
+    lin *= int(dims[1])
+    lin += ind[1].ravel()
+    lin *= int(dims[2])
+    lin += ind[2].ravel()
+    return np.ascontiguousarray(lin)
 
 
 def _compile():

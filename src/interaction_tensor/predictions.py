@@ -82,7 +82,7 @@ def heat_map(scene, pair_point: np.ndarray, pair_score: np.ndarray,
     """
     n = len(scene)
     best = np.zeros(n)
-    count = np.zeros(n, np.int64)
+    count = np.zeros(n, np.int32)
     acc = np.flatnonzero(pair_accepted)
     if len(acc) == 0:
         return best, count
@@ -92,10 +92,12 @@ def heat_map(scene, pair_point: np.ndarray, pair_score: np.ndarray,
     from scipy.spatial import cKDTree
 
     tree = cKDTree(scene.points[hot])
-    d, j = tree.query(scene.points, distance_upper_bound=1.5 * scene.spacing, workers=-1)
-    near = np.isfinite(d)
     heat = best.copy()
-    heat[near] = np.maximum(heat[near], best[hot[j[near]]])
+    for s in range(0, n, 500_000):          # bounds the query's (distance, index) arrays
+        d, j = tree.query(scene.points[s:s + 500_000], distance_upper_bound=1.5 * scene.spacing,
+                          workers=-1)
+        near = np.flatnonzero(np.isfinite(d))
+        heat[s + near] = np.maximum(heat[s + near], best[hot[j[near]]])
     return heat, count
 
 
@@ -104,15 +106,26 @@ def colormap(values: np.ndarray, vmin: float = 0.0, vmax: float = 1.0) -> np.nda
 
     A small built-in table, so that exports need no plotting library.
     """
+    values = np.asarray(values, float)
+    t = np.clip((values - vmin) / max(vmax - vmin, 1e-12), 0, 1)
+    level = np.rint(t * (len(_RAMP) - 2)).astype(np.uint16) + 1     # 1..1024 on the ramp
+    level[values <= 0] = 0                                            # 0: grey
+    return _RAMP[level]
+
+
+def _ramp(levels: int = 1024) -> np.ndarray:
+    """(levels + 1, 3) uint8: grey, then the ramp's colours at ``levels`` even steps (a
+    table, so that colouring N points costs a few bytes each, not N x 3 floats)."""
     anchors = np.array([[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98],
                         [253, 231, 37]], dtype=float)
-    t = np.clip((np.asarray(values, float) - vmin) / max(vmax - vmin, 1e-12), 0, 1)
-    pos = t * (len(anchors) - 1)
+    pos = np.linspace(0, len(anchors) - 1, levels)
     lo = np.floor(pos).astype(int).clip(0, len(anchors) - 2)
     frac = (pos - lo)[:, None]
     rgb = anchors[lo] * (1 - frac) + anchors[lo + 1] * frac
-    rgb[np.asarray(values) <= 0] = (170, 170, 170)
-    return rgb.round().astype(np.uint8)
+    return np.vstack([[170, 170, 170], rgb]).round().astype(np.uint8)
+
+
+_RAMP = _ramp()
 
 
 def heat_properties(detection) -> dict:
@@ -146,14 +159,23 @@ def posed_objects(detection) -> list:
             for p in detection.predictions]
 
 
-def result_scene(detection):
-    """A ``trimesh.Scene`` of the heat-map points and the posed query objects."""
+#: Heat-map points written into ``predictions.glb`` at most (an evenly strided subset of a
+#: larger scene; ``heatmap.ply`` holds them all): a browser draws this many smoothly, and
+#: the glTF export of a 2 M-point scene cost 180 MB.
+GLB_MAX_POINTS = 500_000
+
+
+def result_scene(detection, max_points: int | None = None):
+    """A ``trimesh.Scene`` of the heat-map points (every ``ceil(N / max_points)``-th one when
+    there are more than ``max_points``) and the posed query objects."""
     import trimesh
 
-    colors = np.column_stack([heat_colors(detection), np.full(len(detection.scene), 255,
-                                                               np.uint8)])
+    n = len(detection.scene)
+    step = 1 if not max_points or n <= max_points else -(-n // max_points)
+    colors = heat_colors(detection)[::step]
+    colors = np.column_stack([colors, np.full(len(colors), 255, np.uint8)])
     out = trimesh.Scene()
-    out.add_geometry(trimesh.PointCloud(detection.scene.points, colors=colors),
+    out.add_geometry(trimesh.PointCloud(detection.scene.points[::step], colors=colors),
                      node_name="heatmap", geom_name="heatmap")
     for rank, (v, f) in enumerate(posed_objects(detection), 1):
         if f is None:
@@ -197,7 +219,7 @@ def write_glb(detection, path) -> None:
     """
     import trimesh
 
-    scene = result_scene(detection)
+    scene = result_scene(detection, GLB_MAX_POINTS)
     scene.apply_transform(trimesh.transformations.rotation_matrix(-np.pi / 2, [1, 0, 0]))
     with atomic_path(path) as tmp:
         tmp.write_bytes(trimesh.exchange.gltf.export_glb(scene))
@@ -218,10 +240,11 @@ def export(detection, outdir, scene_name: str | None = None,
     accepted = {
         "count": int(len(acc)),
         "columns": ["point_index", "orientation_index", "score", "comparisons_to_decision"],
-        "point_index": det.pair_point[acc].tolist(),
-        "orientation_index": det.pair_orientation[acc].tolist(),
-        "score": [round(float(s), 6) for s in det.pairs.score[acc]],
-        "comparisons_to_decision": det.pairs.decided_at[acc].tolist(),
+        # arrays: written a block at a time (io.write_json), not as Python lists
+        "point_index": det.pair_point[acc],
+        "orientation_index": det.pair_orientation[acc],
+        "score": det.pairs.score[acc],
+        "comparisons_to_decision": det.pairs.decided_at[acc],
     }
     doc = {
         "scene": scene_name or det.scene.source,

@@ -54,11 +54,12 @@ def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = Non
     k = int(min(k, len(points)))
     tree = cKDTree(points) if tree is None else tree
     normals = np.empty_like(points)
-    step = 200_000  # bounds the (step, k, 3) neighbourhood array
+    step = 50_000  # bounds the (step, k, 3) neighbourhood arrays (about 40 MB)
     for start in range(0, len(points), step):
         sl = slice(start, start + step)
         _, idx = tree.query(points[sl], k=k, workers=-1)
-        nb = points[idx] - points[idx].mean(axis=1, keepdims=True)
+        nb = points[idx]
+        nb -= nb.mean(axis=1, keepdims=True)
         cov = np.einsum("nki,nkj->nij", nb, nb)
         _, vecs = np.linalg.eigh(cov)
         normals[sl] = vecs[:, :, 0]
@@ -81,22 +82,33 @@ def mean_spacing(points: np.ndarray, tree: cKDTree | None = None, sample: int = 
     """Sampling spacing (m) of a surface point cloud: 1 / sqrt(points per square metre).
 
     The same meaning as the spacing at which meshes are sampled (count = area / spacing^2).
-    The density is the median number of neighbours within a disk of a few nearest-neighbour
-    distances, over a random subset; duplicated points (common in scans and converted clouds)
-    do not count.
+    The density is the median number of distinct neighbours within a disk of a few
+    nearest-neighbour distances, over a random subset of centres; duplicated points (common
+    in scans and converted clouds) do not count. Memory: the tree and the subset's
+    neighbourhoods, no copy of the cloud.
     """
-    rng = np.random.default_rng(seed)
-    unique = unique_rows(np.round(points / 1e-6).astype(np.int64)) * 1e-6
-    if len(unique) < 3:
+    points = np.asarray(points, np.float64)
+    if len(points) < 3:
         return 0.0
-    utree = cKDTree(unique) if (tree is None or len(unique) != len(points)) else tree
-    idx = rng.choice(len(unique), size=min(sample, len(unique)), replace=False)
-    d, _ = utree.query(unique[idx], k=2, workers=-1)
-    radius = 8.0 * float(np.median(d[:, 1]))
-    counts = np.asarray(utree.query_ball_point(unique[idx], radius, return_length=True,
-                                               workers=-1))
+    rng = np.random.default_rng(seed)
+    tree = cKDTree(points) if tree is None else tree
+    centres = points[rng.choice(len(points), size=min(sample, len(points)), replace=False)]
+    # nearest *distinct* neighbour (duplicates at distance 0 skipped) of each centre
+    d, _ = tree.query(centres, k=min(8, len(points)), workers=-1)
+    nn = np.where(d > 1e-6, d, np.inf).min(axis=1)
+    if not np.isfinite(nn).any():
+        return 0.0
+    radius = 8.0 * float(np.median(nn[np.isfinite(nn)]))
+    # distinct neighbours within the radius, counted without a copy of the whole cloud:
+    # (centre, micrometre cell) keys of the neighbours, made unique
+    lists = tree.query_ball_point(centres, radius, workers=-1)
+    lengths = np.fromiter((len(x) for x in lists), np.int64, len(lists))
+    near = np.fromiter((i for x in lists for i in x), np.int64, int(lengths.sum()))
+    keys = np.column_stack([np.repeat(np.arange(len(lists)), lengths),
+                            np.round(points[near] / 1e-6).astype(np.int64)])
+    counts = np.bincount(unique_rows(keys)[:, 0], minlength=len(lists))
     density = np.median(counts) / (np.pi * radius ** 2)
-    return float(1.0 / np.sqrt(density)) if density > 0 else float(np.median(d[:, 1]))
+    return float(1.0 / np.sqrt(density)) if density > 0 else float(np.median(nn))
 
 
 def weighted_keypoints(weights: np.ndarray, n: int, seed) -> np.ndarray:

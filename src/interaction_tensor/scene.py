@@ -64,6 +64,18 @@ class Scene:
         return len(self.points)
 
 
+def spatially_sorted(points: np.ndarray, normals: np.ndarray, spacing: float):
+    """``points`` and ``normals`` reordered cell by cell as :meth:`Scene.grid` sorts them, so
+    that the grid shares the scene's arrays instead of copying them (48 bytes a point) and
+    neighbouring points lie near each other in memory."""
+    from .kernels import grid_cells
+
+    lin, *_ = grid_cells(points, GRID_CELL_FACTOR * spacing)
+    order = np.argsort(lin, kind="stable")
+    del lin
+    return np.ascontiguousarray(points[order]), np.ascontiguousarray(normals[order])
+
+
 def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
                   max_points: int = 5_000_000, face_mask=None) -> Scene:
     """Turn a mesh or a point cloud into a :class:`Scene`.
@@ -77,7 +89,8 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
         area = mesh_area(geometry) if face_mask is None else mesh_area(
             Geometry(geometry.vertices, geometry.faces[face_mask]))
         count = int(np.clip(round(area / spacing ** 2), 100, max_points))
-        points, normals = sample_mesh(geometry, count, seed, face_mask=face_mask)
+        points, normals = spatially_sorted(*sample_mesh(geometry, count, seed,
+                                                        face_mask=face_mask), spacing)
         return Scene(points, normals, spacing, geometry.source, sampled=True,
                      notes=list(geometry.notes))
     points = geometry.vertices
@@ -88,5 +101,9 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
     else:
         length = np.linalg.norm(normals, axis=1, keepdims=True)
         normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
-    return Scene(points, normals, mean_spacing(points, tree), geometry.source, False,
-                 notes=list(geometry.notes), _tree=tree)
+    # the tree is not kept: the default (Numba) backend searches its own grid, and a
+    # cKDTree costs 32 bytes a point (rebuilt on first use by the other paths)
+    spacing = mean_spacing(points, tree)
+    del tree
+    points, normals = spatially_sorted(points, normals, spacing)
+    return Scene(points, normals, spacing, geometry.source, False, notes=list(geometry.notes))
