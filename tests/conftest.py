@@ -7,9 +7,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import settings as _hypothesis_settings
 
 import interaction_tensor as it
 from interaction_tensor.examples.procedural import box_part, parts_mesh
+
+# Property-based tests: a fixed-seed sample by default (CI and local runs draw the same
+# cases, so a failure reproduces); HYPOTHESIS_PROFILE=explore draws new, and more, cases.
+_hypothesis_settings.register_profile("default", derandomize=True, deadline=None,
+                                      print_blob=True)
+_hypothesis_settings.register_profile("explore", max_examples=500, deadline=None)
+_hypothesis_settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED_DATA = Path(os.environ.get("ITENSOR_SHARED_DATA", ROOT.parent / "shared" / "data"))

@@ -212,3 +212,44 @@ def test_cut_or_damaged_frame_images_are_refused(which, fraction, garbage, tmp_p
     with pytest.raises(InputError) as exc:
         it.load_scene(frame)
     assert str(frame / which) in str(exc.value) and "\n" not in str(exc.value)
+
+
+def test_a_scene_too_big_for_memory_is_refused_up_front(monkeypatch):
+    from interaction_tensor import scene as scene_mod
+
+    scene_mod.check_memory(1_000_000, "big.ply", available=2 ** 31)          # 0.3 GB: fine
+    with pytest.raises(InputError, match=r"big.ply: 20,000,000 scene points need about 5.6 GB "
+                                         r"and 1.0 GB is available"):
+        scene_mod.check_memory(20_000_000, "big.ply", available=2 ** 30)
+    monkeypatch.setattr(scene_mod, "available_memory", lambda: 10_000 * scene_mod.BYTES_PER_POINT)
+    with pytest.raises(InputError, match="scene points need"):
+        it.load_scene(plane(0.0, 1.0))                                       # 1 cm: 40,000 points
+    assert scene_mod.available_memory is not None
+
+
+def _greedy_reference(positions, scores, k, radius):
+    """Take the best unsuppressed candidate k times (the definition top_k must match)."""
+    masked = np.asarray(scores, float).copy()
+    picks = []
+    for _ in range(k):
+        i = int(np.argmax(masked))
+        if not np.isfinite(masked[i]):
+            break
+        picks.append(i)
+        masked[np.linalg.norm(positions - positions[i], axis=1) <= radius] = -np.inf
+    return picks
+
+
+@hsettings(max_examples=40, deadline=None)
+@given(n=st.integers(0, 9000), k=st.integers(0, 30), radius=st.floats(0.0, 0.5),
+       ties=st.booleans(), seed=st.integers(0, 2**32 - 1))
+def test_top_k_sweep_is_the_greedy_suppression(n, k, radius, ties, seed):
+    """The block sweep (no (N, 3) temporary per pick) picks exactly what the greedy
+    definition picks, ties to the lower index included."""
+    from interaction_tensor.predictions import top_k
+
+    rng = np.random.default_rng(seed)
+    positions = rng.random((n, 3)) * [2, 2, 0.1]
+    scores = np.round(rng.random(n), 1) if ties else rng.random(n)
+    assert top_k(positions, scores, k, radius) == _greedy_reference(positions, scores, k,
+                                                                     radius)

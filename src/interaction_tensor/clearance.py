@@ -83,7 +83,8 @@ def count_violations(points: np.ndarray, orient: np.ndarray, offsets: np.ndarray
     active = np.flatnonzero(need > 0)
     if len(active) == 0 or len(points) == 0:
         return np.zeros(len(points), np.int64)
-    return _numba_clearance.counts(points, orient, offsets[:, active], need[active], grid)
+    return _numba_clearance.counts(points, np.ascontiguousarray(orient, np.int64),
+                                   offsets[:, active], need[active], grid)
 
 
 def nearest_distance_function(scene, grid=None, bound: float | None = None):

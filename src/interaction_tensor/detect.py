@@ -280,7 +280,7 @@ def _score_all(scene, jobs, backend, index, settings, progress, label):
     step = settings.batch_size * n_o
     totals = [np.zeros(len(j.points)) for j in jobs]
     acc = [np.zeros(len(j.points), bool) for j in jobs]
-    at = [np.zeros(len(j.points), np.int64) for j in jobs]
+    at = [np.zeros(len(j.points), np.int32) for j in jobs]
     cmp_ = [0] * len(jobs)
     longest = max((len(j.points) for j in jobs), default=0)
     bar = None
@@ -332,15 +332,17 @@ def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_or
     from .clearance import clearance_offsets, count_violations
 
     score_acc = pairs.accepted.copy()
-    viol = np.full(len(pairs.accepted), -1, np.int64)
+    viol = np.full(len(pairs.accepted), -1, np.int32)
     k = len(tensor.clearance_points)
     if not settings.clearance or k == 0:
         return score_acc, viol
     idx = np.flatnonzero(score_acc)
-    viol[idx] = count_violations(scene.points[pair_point[idx]], pair_orient[idx],
-                                 clearance_offsets(tensor, settings.n_orientations),
-                                 tensor.clearance_radius, settings.clearance_tolerance, scene,
-                                 grid)
+    offsets = clearance_offsets(tensor, settings.n_orientations)
+    for s in range(0, len(idx), 262_144):          # bounds the gathered positions
+        sl = idx[s:s + 262_144]
+        viol[sl] = count_violations(scene.points[pair_point[sl]], pair_orient[sl], offsets,
+                                    tensor.clearance_radius, settings.clearance_tolerance,
+                                    scene, grid)
     pairs.accepted[idx[viol[idx] > clearance_limit(tensor, settings) * k]] = False
     return score_acc, viol
 
@@ -353,13 +355,13 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
     heat, count = heat_map(scene, pair_point, pairs.score, pairs.accepted)
     radius = suppression_radius(tensor, settings)
     acc = np.flatnonzero(pairs.accepted)
-    angles = 2 * np.pi * pair_orient / n_o
     picks = top_k(scene.points[pair_point[acc]], pairs.score[acc], settings.top_k, radius)
+    angles = {i: 2 * np.pi * int(pair_orient[acc[i]]) / n_o for i in picks}
     predictions = [
         Prediction(position=scene.points[pair_point[acc[i]]].copy(),
-                   orientation_index=int(pair_orient[acc[i]]), angle=float(angles[acc[i]]),
+                   orientation_index=int(pair_orient[acc[i]]), angle=float(angles[i]),
                    score=float(pairs.score[acc[i]]),
-                   pose=tensor.pose(scene.points[pair_point[acc[i]]], angles[acc[i]]),
+                   pose=tensor.pose(scene.points[pair_point[acc[i]]], angles[i]),
                    point_index=int(pair_point[acc[i]]))
         for i in picks]
     timings["predictions"] = time.perf_counter() - t3
@@ -422,7 +424,10 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
         ok = candidate_mask(scene.normals[test_idx], tensor.affordance_normal,
                             settings.normal_tolerance_deg, settings.oriented_normals)
         cand = test_idx[ok]
-        pp, po = np.repeat(cand, n_o), np.tile(np.arange(n_o), len(cand))
+        # compact pair arrays (a 2 M-point scene at 30 % has millions of pairs): int32 point
+        # and int16 orientation indices, widened where a kernel needs int64
+        pp = np.repeat(cand.astype(np.int32 if len(scene) < 2 ** 31 else np.int64), n_o)
+        po = np.tile(np.arange(n_o, dtype=np.int16 if n_o < 2 ** 15 else np.int64), len(cand))
         cands.append(cand)
         pp_list.append(pp)
         po_list.append(po)

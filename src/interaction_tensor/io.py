@@ -480,14 +480,6 @@ def write_ply_points(path, points, colors=None, normals=None, **scalars) -> None
     if colors is not None:
         fields += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
     fields += [(k, "<f4") for k in scalars]
-    data = np.empty(len(points), dtype=fields)
-    data["x"], data["y"], data["z"] = points.T
-    if normals is not None:
-        data["nx"], data["ny"], data["nz"] = np.asarray(normals).T
-    if colors is not None:
-        data["red"], data["green"], data["blue"] = np.asarray(colors, dtype=np.uint8).T
-    for k, v in scalars.items():
-        data[k] = v
     kinds = {"<f4": "float", "u1": "uchar"}
     header = ["ply", "format binary_little_endian 1.0", "comment made by interaction-tensor",
               f"element vertex {len(points)}"]
@@ -496,7 +488,18 @@ def write_ply_points(path, points, colors=None, normals=None, **scalars) -> None
     with atomic_path(path) as tmp:
         with open(tmp, "wb") as fh:
             fh.write(("\n".join(header) + "\n").encode("ascii"))
-            fh.write(data.tobytes())
+            for s in range(0, len(points), 250_000):     # a block at a time: bounded memory
+                sl = slice(s, s + 250_000)
+                data = np.empty(len(points[sl]), dtype=fields)
+                data["x"], data["y"], data["z"] = points[sl].T
+                if normals is not None:
+                    data["nx"], data["ny"], data["nz"] = np.asarray(normals[sl]).T
+                if colors is not None:
+                    data["red"], data["green"], data["blue"] = np.asarray(colors[sl],
+                                                                          dtype=np.uint8).T
+                for k, v in scalars.items():
+                    data[k] = v[sl]
+                fh.write(data.tobytes())
 
 
 def write_mesh(path, vertices, faces=None, color=None) -> None:

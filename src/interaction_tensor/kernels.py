@@ -76,7 +76,8 @@ class Grid:
     Attributes
     ----------
     points, normals : (N, 3) float64 sorted by cell
-    order : (N,) int64, original index of each sorted point
+    order : (N,) int64, original index of each sorted point; None when the points were
+        already in cell order (the grid then shares the scene's arrays)
     starts : (C + 1,) int32 (int64 beyond 2**31 points), points of cell c are
         ``starts[c]:starts[c + 1]``
     seed : (C,) int32, the non-empty cell whose centre is nearest to each cell's centre
@@ -117,7 +118,7 @@ def build_grid(points: np.ndarray, normals: np.ndarray, cell: float) -> Grid:
     lin, lo, cell, dims = grid_cells(points, cell)
     order = np.argsort(lin, kind="stable")
     if np.all(order[1:] > order[:-1]):             # already sorted: share the arrays
-        order = np.arange(len(points))
+        order = None
         sorted_points, sorted_normals = points, normals
     else:
         sorted_points, sorted_normals = points[order], normals[order]
@@ -173,7 +174,7 @@ def nearest_indices(grid: Grid, queries: np.ndarray) -> np.ndarray:
     out = np.empty(len(queries), np.int64)
     k["nearest_many"](np.ascontiguousarray(queries, dtype=np.float64), grid.points,
                       grid.starts, grid.seed, grid.origin, grid.cell, grid.dims, out)
-    return grid.order[out]
+    return out if grid.order is None else grid.order[out]
 
 
 @dataclass

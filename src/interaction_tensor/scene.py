@@ -64,6 +64,51 @@ class Scene:
         return len(self.points)
 
 
+#: Bytes a scene point costs ``detect`` at its defaults, with a margin (benchmarks/memory.py
+#: measures it); a scene needing more than the memory available is refused up front.
+BYTES_PER_POINT = 300
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation (Linux ``MemAvailable``, or the cgroup
+    limit a container sets when it is lower); None where it cannot be read."""
+    avail = None
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    avail = int(line.split()[1]) * 1024
+                    break
+    except OSError:
+        return None
+    for limit_file, usage_file in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+                                   ("/sys/fs/cgroup/memory/memory.limit_in_bytes",
+                                    "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+        try:
+            limit = open(limit_file).read().strip()
+            if limit.isdigit() and int(limit) < 2 ** 60:
+                free = int(limit) - int(open(usage_file).read().strip())
+                avail = free if avail is None else min(avail, free)
+            break
+        except (OSError, ValueError):
+            continue
+    return avail
+
+
+def check_memory(n_points: int, source, available: int | None = None) -> None:
+    """Refuse, before any work, a scene of ``n_points`` that would need more memory than is
+    available (:data:`BYTES_PER_POINT` each): one clear line instead of an OOM kill."""
+    from .errors import InputError
+
+    available = available_memory() if available is None else available
+    need = int(n_points) * BYTES_PER_POINT
+    if available is not None and need > available:
+        raise InputError(source, f"{n_points:,} scene points need about {need / 2**30:.1f} GB "
+                                 f"and {available / 2**30:.1f} GB is available; sample fewer "
+                                 "(a coarser --spacing for a mesh, --voxel-size with --scan for "
+                                 "a cloud) or use a machine with more memory")
+
+
 def spatially_sorted(points: np.ndarray, normals: np.ndarray, spacing: float):
     """``points`` and ``normals`` reordered cell by cell as :meth:`Scene.grid` sorts them, so
     that the grid shares the scene's arrays instead of copying them (48 bytes a point) and
@@ -89,11 +134,13 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
         area = mesh_area(geometry) if face_mask is None else mesh_area(
             Geometry(geometry.vertices, geometry.faces[face_mask]))
         count = int(np.clip(round(area / spacing ** 2), 100, max_points))
+        check_memory(count, geometry.source)
         points, normals = spatially_sorted(*sample_mesh(geometry, count, seed,
                                                         face_mask=face_mask), spacing)
         return Scene(points, normals, spacing, geometry.source, sampled=True,
                      notes=list(geometry.notes))
     points = geometry.vertices
+    check_memory(len(points), geometry.source)
     tree = cKDTree(points)
     normals = geometry.normals
     if normals is None or len(normals) != len(points):
