@@ -96,11 +96,13 @@ def heat_map(scene, pair_point: np.ndarray, pair_score: np.ndarray,
     n = len(scene)
     best = np.zeros(n)
     count = np.zeros(n, np.int32)
-    acc = np.flatnonzero(pair_accepted)
-    if len(acc) == 0:
+    if not pair_accepted.any():
         return best, count
-    np.maximum.at(best, pair_point[acc], pair_score[acc])
-    np.add.at(count, pair_point[acc], 1)
+    for s in range(0, len(pair_accepted), 1 << 20):     # bounded gathers of accepted pairs
+        sl = slice(s, s + (1 << 20))
+        acc = pair_accepted[sl]
+        np.maximum.at(best, pair_point[sl][acc], pair_score[sl][acc])
+        np.add.at(count, pair_point[sl][acc], 1)
     hot = np.flatnonzero(best > 0)
     from scipy.spatial import cKDTree
 
@@ -120,9 +122,14 @@ def colormap(values: np.ndarray, vmin: float = 0.0, vmax: float = 1.0) -> np.nda
     A small built-in table, so that exports need no plotting library.
     """
     values = np.asarray(values, float)
-    t = np.clip((values - vmin) / max(vmax - vmin, 1e-12), 0, 1)
-    level = np.rint(t * (len(_RAMP) - 2)).astype(np.uint16) + 1     # 1..1024 on the ramp
-    level[values <= 0] = 0                                            # 0: grey
+    t = values - vmin                                   # one temporary, then in place
+    t *= (len(_RAMP) - 2) / max(vmax - vmin, 1e-12)
+    np.clip(t, 0, len(_RAMP) - 2, out=t)
+    np.rint(t, out=t)
+    level = t.astype(np.uint16)
+    del t
+    level += 1                                          # 1..1024 on the ramp
+    level[values <= 0] = 0                              # 0: grey
     return _RAMP[level]
 
 
@@ -161,7 +168,7 @@ def heat_colors(detection) -> np.ndarray:
     """(N, 3) uint8 heat-map colours of the scene points: the ramp from the threshold to 1,
     grey where nothing was accepted near."""
     lo = detection.threshold if detection.threshold < 1 else 0.0
-    return colormap(np.where(detection.heat > 0, detection.heat, 0), vmin=lo, vmax=1.0)
+    return colormap(detection.heat, vmin=lo, vmax=1.0)       # heat <= 0: grey
 
 
 def posed_objects(detection) -> list:
@@ -186,8 +193,7 @@ def result_scene(detection, max_points: int | None = None):
     n = len(detection.scene)
     step = 1 if not max_points or n <= max_points else -(-n // max_points)
     lo = detection.threshold if detection.threshold < 1 else 0.0
-    heat = detection.heat[::step]
-    colors = colormap(np.where(heat > 0, heat, 0), vmin=lo, vmax=1.0)
+    colors = colormap(detection.heat[::step], vmin=lo, vmax=1.0)
     colors = np.column_stack([colors, np.full(len(colors), 255, np.uint8)])
     out = trimesh.Scene()
     out.add_geometry(trimesh.PointCloud(detection.scene.points[::step], colors=colors),
