@@ -5,6 +5,7 @@ directory at once refuses; a directory holding other files is never replaced."""
 from __future__ import annotations
 
 import hashlib
+import os
 import signal
 import subprocess
 import sys
@@ -98,3 +99,28 @@ def test_a_directory_with_other_files_is_never_replaced(inputs, tmp_path, capsys
     err = capsys.readouterr().err
     assert "notes.txt" in err and "would be lost" in err
     assert (good / "notes.txt").read_text() == "mine"
+
+
+def test_signals_wait_while_a_temporary_is_made_or_swapped():
+    """SIGTERM arriving between making a temporary and entering the block that removes it
+    left .part files behind under load (1 run in the full suite): it is now held back over
+    those few lines and raised right after them."""
+    from interaction_tensor.io import _signals_deferred
+
+    class Stop(Exception):
+        pass
+
+    def raise_stop(*_):
+        raise Stop
+
+    previous = signal.signal(signal.SIGTERM, raise_stop)
+    steps = []
+    try:
+        with pytest.raises(Stop):
+            with _signals_deferred():
+                os.kill(os.getpid(), signal.SIGTERM)
+                steps.append("made")                   # still runs: the signal waits
+            steps.append("after")                      # never: it is raised on leaving
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+    assert steps == ["made"]

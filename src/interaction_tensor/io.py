@@ -310,21 +310,21 @@ def atomic_path(path):
     make_dirs(path.parent, path)
     if path.is_dir():
         raise InputError(path, "cannot write: it is a directory")
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part" + path.suffix,
-                                   dir=path.parent)
-    except OSError as exc:
-        raise InputError(path, f"cannot write: {exc.strerror}") from None
-    os.close(fd)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes 0600; give the file normal permissions
+    with _signals_deferred():           # no temporary left by a signal between these lines
+        try:
+            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part" + path.suffix,
+                                       dir=path.parent)
+        except OSError as exc:
+            raise InputError(path, f"cannot write: {exc.strerror}") from None
+        os.close(fd)
+        os.chmod(tmp, 0o666 & ~_umask())  # mkstemp makes 0600; give the file normal permissions
     try:
         yield Path(tmp)
         os.replace(tmp, path)
     finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+        with _signals_deferred():
+            if os.path.exists(tmp):
+                os.unlink(tmp)
 
 
 @contextlib.contextmanager
@@ -344,26 +344,51 @@ def atomic_dir(path, marker: str, allowed=None):
     make_dirs(path.parent, path)
     with _directory_lock(path):
         _remove_stale(path)
-        try:
-            tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".part",
-                                        dir=path.parent))
-        except OSError as exc:
-            raise InputError(path, f"cannot write: {exc.strerror}") from None
-        os.chmod(tmp, 0o777 & ~_umask())
+        # SIGINT/SIGTERM wait while the temporary directory is made, swapped in or removed:
+        # arriving in between they left it behind, or the old result moved aside
+        with _signals_deferred():
+            try:
+                tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".part",
+                                            dir=path.parent))
+            except OSError as exc:
+                raise InputError(path, f"cannot write: {exc.strerror}") from None
+            os.chmod(tmp, 0o777 & ~_umask())
         try:
             yield tmp
-            _check_replaceable(path, marker, allowed)   # nothing new appeared meanwhile
-            old = None
-            if path.exists():
-                old = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".old",
-                                            dir=path.parent))
-                os.replace(path, old / "previous")
-            os.replace(tmp, path)
-            if old is not None:
-                shutil.rmtree(old, ignore_errors=True)
+            with _signals_deferred():
+                _check_replaceable(path, marker, allowed)   # nothing new appeared meanwhile
+                old = None
+                if path.exists():
+                    old = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".old",
+                                                dir=path.parent))
+                    os.replace(path, old / "previous")
+                os.replace(tmp, path)
+                if old is not None:
+                    shutil.rmtree(old, ignore_errors=True)
         finally:
-            if tmp.exists():
-                shutil.rmtree(tmp, ignore_errors=True)
+            with _signals_deferred():
+                if tmp.exists():
+                    shutil.rmtree(tmp, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _signals_deferred():
+    """Hold SIGINT and SIGTERM back (they are delivered, and raise, right after) while a
+    few file operations that must not be cut in half run; a no-op off the main thread or
+    where signals cannot be masked."""
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread() or not hasattr(
+            signal, "pthread_sigmask"):
+        yield
+        return
+    held = {signal.SIGINT, signal.SIGTERM}
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _check_replaceable(path: Path, marker: str, allowed) -> None:
