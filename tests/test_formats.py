@@ -357,6 +357,11 @@ def test_obj_rows_indices_and_polygons(tmp_path):
                                      "f 1/1/1 2//1 3 4\nf -1 -2 -3\n")
     g = load_geometry(tmp_path / "ok.obj")
     assert g.faces.tolist() == [[0, 1, 2], [0, 2, 3], [3, 2, 1]]    # fan, then relative
+    # indented rows and trailing blanks are valid OBJ: read, not skipped or miscounted
+    (tmp_path / "ws.obj").write_text("  v 0 0 0\n\tv 1 0 0  \nv 0 1 0\nv 0 0 1\t\n"
+                                     "  f 1 2 3 4   \n")
+    g = load_geometry(tmp_path / "ws.obj")
+    assert len(g.vertices) == 4 and g.faces.tolist() == [[0, 1, 2], [0, 2, 3]]
     for text, says in (("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0\nf 1 2 3\n", "line 4 'v 0 0'"),
                        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2\n", "line 5 'f 1 2'"),
                        ("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 9\n", "outside the 4"),

@@ -253,3 +253,17 @@ def test_top_k_sweep_is_the_greedy_suppression(n, k, radius, ties, seed):
     scores = np.round(rng.random(n), 1) if ties else rng.random(n)
     assert top_k(positions, scores, k, radius) == _greedy_reference(positions, scores, k,
                                                                      radius)
+
+
+def test_a_scene_with_no_candidate_says_why(tmp_path, capsys, corner_tensor):
+    """A valid scene where no normal fits the affordance exits 0 and says why."""
+    g = np.stack(np.meshgrid(np.linspace(0, 0.5, 30), np.linspace(0, 0.5, 30)), -1).reshape(-1, 2)
+    pts = np.column_stack([np.zeros(len(g)), g])                   # a wall: normals along x
+    normals = np.tile([1.0, 0.0, 0.0], (len(pts), 1))
+    from interaction_tensor.io import write_ply_points
+    write_ply_points(tmp_path / "wall.ply", pts, normals=normals)
+    corner_tensor.save(tmp_path / "t.npz")
+    assert main(["detect", str(tmp_path / "wall.ply"), str(tmp_path / "t.npz"),
+                 "-o", str(tmp_path / "out")]) == 0
+    out = capsys.readouterr().out
+    assert "0 after the normal filter" in out and "no candidate: no test point's normal" in out

@@ -782,7 +782,6 @@ def nearest_many(q, pts, starts, seed, origin, cell, dims, out):
                          origin[2], cell, dims[0], dims[1], dims[2])
 
 
-
 @njit(cache=True, parallel=True, fastmath=False)
 def winding_numbers(points, tri):
     """Generalised winding numbers of ``points`` (P, 3) for triangles ``tri`` (F, 3, 3): the

@@ -34,7 +34,8 @@ def _geometry_options(p: argparse.ArgumentParser) -> None:
 
 def detection_options(p) -> None:
     """The options of :class:`DetectSettings` (``itensor detect`` and ``itensor batch``)."""
-    p.add_argument("--top-k", type=number(int, low=0), default=10, help="predictions kept after suppression")
+    p.add_argument("--top-k", type=number(int, low=0), default=10,
+                   help="predictions kept after suppression")
     p.add_argument("--sample-fraction", type=_fraction, default=0.30,
                    help="fraction of scene points used as test points (the paper's 0.3)")
     seed_option(p)
@@ -200,6 +201,10 @@ def _report(args, result, outdir) -> None:
         _say(args, f"note: {note}")
     _say(args, f"scene: {st['scene_points']} points, {st['test_points_sampled']} test points, "
                f"{st['candidates_after_normal_filter']} after the normal filter")
+    if st["candidates_after_normal_filter"] == 0:
+        _say(args, "no candidate: no test point's normal lies within --normal-tolerance "
+                   f"({result.settings.normal_tolerance_deg:g} deg) of the descriptor's "
+                   "affordance normal, so nothing was scored")
     rate = st.get("candidates_per_second")
     _say(args, f"scored {st['pairs_scored']} (point, orientation) pairs in "
                f"{st['seconds']['scoring']:.2f} s"
@@ -432,7 +437,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("demo", help="train and detect on built-in procedural data")
     p.add_argument("-o", "--output", default="demo_out", help="output directory")
-    p.add_argument("--top-k", type=number(int, low=0), default=10, help="predictions kept after suppression")
+    p.add_argument("--top-k", type=number(int, low=0), default=10,
+                   help="predictions kept after suppression")
     seed_option(p)
     p.add_argument("--render", action="store_true",
                    help="also write render.png: the heat map and the top predictions")
@@ -474,8 +480,9 @@ def _on_sigterm(signum, frame):
 def _fixed_mmap_threshold() -> None:
     """glibc raises its mmap threshold to 32 MB after the first large array is freed, so the
     many 1-30 MB arrays of a detection then come from the heap and stay resident when freed
-    (about 40 MB more peak on a 2 M-point cloud, benchmarks/memory.py). Keep it at 128 kB
-    for the command line's one-shot processes; elsewhere, or without glibc, nothing."""
+    (on a 2 M-point cloud at 1 % test points: 16-30 MB more peak per stage and about 40 MB
+    more resident between stages). Keep it at 128 kB for the command line's one-shot
+    processes; elsewhere, or without glibc, nothing."""
     if not sys.platform.startswith("linux"):
         return
     try:

@@ -5,18 +5,13 @@ Registered in :mod:`interaction_tensor.cli` through ``register(subparsers)``.
 
 from __future__ import annotations
 
-import argparse
 from pathlib import Path
 
-from .cli_common import _fraction, _spacing, quiet_option, seed_option
+from .cli_common import _fraction, _spacing, number, quiet_option, seed_option
 from .errors import InputError
 
 
-def _positive_int(text: str) -> int:
-    value = int(text)
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive integer, got {text}")
-    return value
+_positive_int = number(int, low=1, what="a positive integer")
 
 
 def _objects_dir(path):

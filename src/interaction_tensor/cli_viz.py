@@ -63,6 +63,7 @@ def register(subparsers) -> None:
     p = subparsers.add_parser("render", help="(re)draw OUTDIR/render.png for a detection")
     p.add_argument("outdir", help="a directory written by 'itensor detect' or 'itensor demo'")
     p.add_argument("-o", "--output", default=None, help="PNG to write (default OUTDIR/render.png)")
-    p.add_argument("--top-k", type=number(int, low=0), default=None, help="objects drawn (default: all)")
+    p.add_argument("--top-k", type=number(int, low=0), default=None,
+                   help="objects drawn (default: all)")
     quiet_option(p)
     p.set_defaults(func=cmd_render)

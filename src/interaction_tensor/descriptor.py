@@ -51,7 +51,7 @@ class Keypoints:
 
 #: Training refuses a query whose surface lies mostly on the scene-object's (a flat query
 #: laid in a table top): more than this fraction of its samples within one spacing of it.
-#: The shipped examples have 2-20 %.
+#: The shipped examples have 0.3-19 %.
 MAX_SURFACE_SHARED = 0.6
 #: Training refuses a query with more than this fraction of its surface inside the
 #: scene-object (the example's objects interpenetrate; 0 in the shipped examples).

@@ -356,14 +356,13 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
     radius = suppression_radius(tensor, settings)
     acc = np.flatnonzero(pairs.accepted)
     picks = top_k(scene.points[pair_point[acc]], pairs.score[acc], settings.top_k, radius)
-    angles = {i: 2 * np.pi * int(pair_orient[acc[i]]) / n_o for i in picks}
-    predictions = [
-        Prediction(position=scene.points[pair_point[acc[i]]].copy(),
-                   orientation_index=int(pair_orient[acc[i]]), angle=float(angles[i]),
-                   score=float(pairs.score[acc[i]]),
-                   pose=tensor.pose(scene.points[pair_point[acc[i]]], angles[i]),
-                   point_index=int(pair_point[acc[i]]))
-        for i in picks]
+    predictions = []
+    for i in picks:
+        o, p = int(pair_orient[acc[i]]), int(pair_point[acc[i]])
+        angle = 2 * np.pi * o / n_o
+        predictions.append(Prediction(position=scene.points[p].copy(), orientation_index=o,
+                                      angle=float(angle), score=float(pairs.score[acc[i]]),
+                                      pose=tensor.pose(scene.points[p], angle), point_index=p))
     timings["predictions"] = time.perf_counter() - t3
     timings["total"] = time.perf_counter() - t0
     decided = pairs.decided_at

@@ -116,11 +116,11 @@ def build_grid(points: np.ndarray, normals: np.ndarray, cell: float) -> Grid:
     Points already in cell order (a :class:`Scene` from :func:`prepare_scene`) are used as
     they are, not copied: the grid then costs its cell table only."""
     lin, lo, cell, dims = grid_cells(points, cell)
-    order = np.argsort(lin, kind="stable")
-    if np.all(order[1:] > order[:-1]):             # already sorted: share the arrays
+    if np.all(lin[1:] >= lin[:-1]):                # already in cell order: share the arrays
         order = None
         sorted_points, sorted_normals = points, normals
     else:
+        order = np.argsort(lin, kind="stable")
         sorted_points, sorted_normals = points[order], normals[order]
     counts = np.bincount(lin, minlength=int(np.prod(dims)))
     del lin

@@ -164,11 +164,11 @@ OUTPUT_NAMES = ("predictions.json", "heatmap.ply", "predictions.glb", "top", "re
                 "top_input_frame", "scene.ply", "scene_input_frame.ply")
 
 
-def heat_colors(detection) -> np.ndarray:
-    """(N, 3) uint8 heat-map colours of the scene points: the ramp from the threshold to 1,
-    grey where nothing was accepted near."""
+def heat_colors(detection, step: int = 1) -> np.ndarray:
+    """(N, 3) uint8 heat-map colours of the scene points (every ``step``-th one): the ramp
+    from the threshold to 1, grey where nothing was accepted near."""
     lo = detection.threshold if detection.threshold < 1 else 0.0
-    return colormap(detection.heat, vmin=lo, vmax=1.0)       # heat <= 0: grey
+    return colormap(detection.heat[::step], vmin=lo, vmax=1.0)       # heat <= 0: grey
 
 
 def posed_objects(detection) -> list:
@@ -192,8 +192,7 @@ def result_scene(detection, max_points: int | None = None):
 
     n = len(detection.scene)
     step = 1 if not max_points or n <= max_points else -(-n // max_points)
-    lo = detection.threshold if detection.threshold < 1 else 0.0
-    colors = colormap(detection.heat[::step], vmin=lo, vmax=1.0)
+    colors = heat_colors(detection, step)
     colors = np.column_stack([colors, np.full(len(colors), 255, np.uint8)])
     out = trimesh.Scene()
     out.add_geometry(trimesh.PointCloud(detection.scene.points[::step], colors=colors),

@@ -221,11 +221,11 @@ def _obj_geometry(path: Path):
     text = raw.decode("utf-8", "replace")
     if "#" in text:
         text = re.sub(r"#[^\n]*", "", text)
-    lines = np.array(text.splitlines(), dtype=object)
-    head = np.array([ln[:2] for ln in lines], dtype="U2")
+    lines = np.array([ln.strip() for ln in text.splitlines()], dtype=object)
+    head = np.array([ln.split(None, 1)[0] if ln else "" for ln in lines], dtype=object)
     kind = np.zeros(len(lines), np.int8)
-    kind[(head == "v ") | (head == "v\t")] = 1
-    kind[(head == "f ") | (head == "f\t")] = 2
+    kind[head == "v"] = 1                     # a row's keyword: a bare "f" is a bad face
+    kind[head == "f"] = 2
     rows = np.flatnonzero(kind)
     if len(rows) and not raw.endswith((b"\n", b"\r")) and rows[-1] == len(lines) - 1:
         raise InputError(path, f"OBJ ends in the middle of line {len(lines)} (the file looks "
