@@ -105,6 +105,32 @@ def test_grid_nearest_neighbour_is_exact():
     np.testing.assert_allclose(d_got, d_ref, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("shuffled", [False, True])
+def test_grid_tables_are_exact_and_own_their_memory(shuffled):
+    """Cell starts cover each cell's points; each cell's seed is a non-empty cell at the
+    least centre distance; the tables are int32 arrays of their own (a view would keep the
+    distance transform's 12 bytes a cell alive)."""
+    rng = np.random.default_rng(5)
+    pts = rng.random((3000, 3)) * [1, 0.6, 0.05] + [0, 0, 0.3]      # a slab: many empty cells
+    if not shuffled:
+        pts = pts[np.lexsort(((pts[:, 2] // 0.04), (pts[:, 1] // 0.04), (pts[:, 0] // 0.04)))]
+    grid = build_grid(pts, np.zeros_like(pts), 0.04)
+    nx, ny, nz = (int(v) for v in grid.dims)
+    n_cells = nx * ny * nz
+    assert grid.starts.dtype == np.int32 and grid.seed.dtype == np.int32
+    assert grid.seed.base is None and grid.seed.shape == (n_cells,)
+    cell_of = np.minimum(((grid.points - grid.origin) / grid.cell).astype(int), grid.dims - 1)
+    lin = (cell_of[:, 0] * ny + cell_of[:, 1]) * nz + cell_of[:, 2]
+    np.testing.assert_array_equal(np.diff(grid.starts), np.bincount(lin, minlength=n_cells))
+    occupied = np.flatnonzero(np.diff(grid.starts) > 0)
+    ijk = np.stack(np.unravel_index(np.arange(n_cells), (nx, ny, nz)), 1)
+    occ_ijk = ijk[occupied]
+    best = ((ijk[:, None, :] - occ_ijk[None]) ** 2).sum(2).min(1)
+    got = ((ijk - ijk[grid.seed]) ** 2).sum(1)
+    assert np.all(np.diff(grid.starts)[grid.seed] > 0)
+    np.testing.assert_array_equal(got, best)
+
+
 def test_backends_give_the_same_detection(corner_tensor):
     scene_geometry, _ = moved_corner_scene(1.0, np.array([0.2, 0.1, 0.0]))
     scene = it.prepare_scene(scene_geometry, 0.01, seed=1)

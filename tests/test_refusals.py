@@ -231,7 +231,7 @@ def _greedy_reference(positions, scores, k, radius):
     """Take the best unsuppressed candidate k times (the definition top_k must match)."""
     masked = np.asarray(scores, float).copy()
     picks = []
-    for _ in range(k):
+    for _ in range(k if len(masked) else 0):
         i = int(np.argmax(masked))
         if not np.isfinite(masked[i]):
             break
@@ -251,8 +251,12 @@ def test_top_k_sweep_is_the_greedy_suppression(n, k, radius, ties, seed):
     rng = np.random.default_rng(seed)
     positions = rng.random((n, 3)) * [2, 2, 0.1]
     scores = np.round(rng.random(n), 1) if ties else rng.random(n)
-    assert top_k(positions, scores, k, radius) == _greedy_reference(positions, scores, k,
-                                                                     radius)
+    expected = _greedy_reference(positions, scores, k, radius)
+    assert top_k(positions, scores, k, radius) == expected
+    # through an index into a larger array (the scene's points), as detect calls it
+    base = np.vstack([rng.random((n, 3)), positions[::-1]])
+    index = np.arange(2 * n - 1, n - 1, -1)
+    assert top_k(base, scores, k, radius, index=index) == expected
 
 
 def test_a_scene_with_no_candidate_says_why(tmp_path, capsys, corner_tensor):

@@ -355,7 +355,7 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
     heat, count = heat_map(scene, pair_point, pairs.score, pairs.accepted)
     radius = suppression_radius(tensor, settings)
     acc = np.flatnonzero(pairs.accepted)
-    picks = top_k(scene.points[pair_point[acc]], pairs.score[acc], settings.top_k, radius)
+    picks = top_k(scene.points, pairs.score[acc], settings.top_k, radius, index=pair_point[acc])
     predictions = []
     for i in picks:
         o, p = int(pair_orient[acc[i]]), int(pair_point[acc[i]])

@@ -373,22 +373,35 @@ def atomic_dir(path, marker: str, allowed=None):
 
 @contextlib.contextmanager
 def _signals_deferred():
-    """Hold SIGINT and SIGTERM back (they are delivered, and raise, right after) while a
-    few file operations that must not be cut in half run; a no-op off the main thread or
-    where signals cannot be masked."""
+    """Hold SIGINT and SIGTERM back (they are raised right after, with the handlers that were
+    in place) while a few file operations that must not be cut in half run; a no-op off the
+    main thread. Python-level handlers, not a signal mask: a mask holds only the calling
+    thread, and the kernel hands a process signal to any thread that does not mask it (Numba's
+    and tqdm's threads), whose arrival Python then runs in the main thread all the same."""
     import signal
     import threading
 
-    if threading.current_thread() is not threading.main_thread() or not hasattr(
-            signal, "pthread_sigmask"):
+    if threading.current_thread() is not threading.main_thread():
         yield
         return
-    held = {signal.SIGINT, signal.SIGTERM}
-    previous = signal.pthread_sigmask(signal.SIG_BLOCK, held)
+    caught = []
+
+    def hold(signum, _frame):
+        caught.append(signum)
+
+    previous = {}
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        handler = signal.getsignal(sig)
+        if handler is None:                 # installed outside Python: cannot be restored
+            continue
+        previous[sig] = signal.signal(sig, hold)
     try:
         yield
     finally:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        for sig in dict.fromkeys(caught):
+            signal.raise_signal(sig)
 
 
 def _check_replaceable(path: Path, marker: str, allowed) -> None:

@@ -51,14 +51,20 @@ class Prediction:
                 "point_index": self.point_index}
 
 
-def top_k(positions: np.ndarray, scores: np.ndarray, k: int, radius: float) -> list[int]:
+def top_k(positions: np.ndarray, scores: np.ndarray, k: int, radius: float,
+          index: np.ndarray | None = None) -> list[int]:
     """Greedy non-maximum suppression: indices of up to ``k`` best, ``radius`` apart.
 
+    Candidate i is at ``positions[i]``, or at ``positions[index[i]]`` when ``index`` is given
+    (the scene's points and the pairs' point indices: no gathered (N, 3) copy).
     Ties in score are broken by the lower index. The candidates are swept best first in
     blocks; within a block, each one is tested against the picks so far at once (the same
     picks as repeatedly taking the best unsuppressed one, without an (N, 3) temporary per
     pick: a million accepted pairs cost their sort order only).
     """
+    if index is not None:
+        index = np.asarray(index)
+        return top_k(_Gathered(positions, index), scores, k, radius)
     scores = np.asarray(scores)
     if len(scores) == 0 or k <= 0:
         return []
@@ -86,6 +92,16 @@ def top_k(positions: np.ndarray, scores: np.ndarray, k: int, radius: float) -> l
     return picks
 
 
+class _Gathered:
+    """``base[index[i]]`` on indexing with an index array, without gathering all of it."""
+
+    def __init__(self, base, index):
+        self.base, self.index = base, index
+
+    def __getitem__(self, i):
+        return self.base[self.index[i]]
+
+
 def heat_map(scene, pair_point: np.ndarray, pair_score: np.ndarray,
              pair_accepted: np.ndarray):
     """Per-point heat: the best accepted score of the nearest test point, spread to the
@@ -104,15 +120,16 @@ def heat_map(scene, pair_point: np.ndarray, pair_score: np.ndarray,
         np.maximum.at(best, pair_point[sl][acc], pair_score[sl][acc])
         np.add.at(count, pair_point[sl][acc], 1)
     hot = np.flatnonzero(best > 0)
+    hot_best = best[hot]                    # the scores spread, before spreading raises them
     from scipy.spatial import cKDTree
 
     tree = cKDTree(scene.points[hot])
-    heat = best.copy()
+    heat = best                             # spread in place: no second (N,) array
     for s in range(0, n, 500_000):          # bounds the query's (distance, index) arrays
         d, j = tree.query(scene.points[s:s + 500_000], distance_upper_bound=1.5 * scene.spacing,
                           workers=-1)
         near = np.flatnonzero(np.isfinite(d))
-        heat[s + near] = np.maximum(heat[s + near], best[hot[j[near]]])
+        heat[s + near] = np.maximum(heat[s + near], hot_best[j[near]])
     return heat, count
 
 
@@ -256,26 +273,6 @@ def export(detection, outdir, scene_name: str | None = None,
     outdir.mkdir(parents=True, exist_ok=True)
     det = detection
     tensor = det.tensor
-    acc = det.accepted
-    accepted = {
-        "count": int(len(acc)),
-        "columns": ["point_index", "orientation_index", "score", "comparisons_to_decision"],
-        # arrays: written a block at a time (io.write_json), not as Python lists
-        "point_index": det.pair_point[acc],
-        "orientation_index": det.pair_orientation[acc],
-        "score": det.pairs.score[acc],
-        "comparisons_to_decision": det.pairs.decided_at[acc],
-    }
-    doc = {
-        "scene": scene_name or det.scene.source,
-        "descriptor": descriptor_name or tensor.affordance,
-        "affordance": tensor.affordance,
-        "parameters": {**det.settings.to_dict(), "threshold_used": det.threshold},
-        "pose_convention": "x_scene = pose @ [x_query_training_frame, 1]; angle about +Z",
-        "predictions": [p.to_dict() for p in det.predictions],
-        "accepted": accepted,
-        "stats": det.stats,
-    }
     # heat map: heat in [threshold, 1] mapped onto the colour ramp
     write_ply_points(outdir / "heatmap.ply", det.scene.points, colors=heat_colors(det),
                      **heat_properties(det))
@@ -286,5 +283,27 @@ def export(detection, outdir, scene_name: str | None = None,
     for rank, (v, f) in enumerate(posed_objects(det), 1):
         write_mesh(top / f"top_{rank:02d}.ply", v, f, color=OBJECT_COLOR)
     write_glb(det, outdir / "predictions.glb")
+    # the accepted pairs last: their gathered columns are not held while the above is built
+    acc = det.accepted
+    accepted = {
+        "count": int(len(acc)),
+        "columns": ["point_index", "orientation_index", "score", "comparisons_to_decision"],
+        # arrays: written a block at a time (io.write_json), not as Python lists
+        "point_index": det.pair_point[acc],
+        "orientation_index": det.pair_orientation[acc],
+        "score": det.pairs.score[acc],
+        "comparisons_to_decision": det.pairs.decided_at[acc],
+    }
+    del acc
+    doc = {
+        "scene": scene_name or det.scene.source,
+        "descriptor": descriptor_name or tensor.affordance,
+        "affordance": tensor.affordance,
+        "parameters": {**det.settings.to_dict(), "threshold_used": det.threshold},
+        "pose_convention": "x_scene = pose @ [x_query_training_frame, 1]; angle about +Z",
+        "predictions": [p.to_dict() for p in det.predictions],
+        "accepted": accepted,
+        "stats": det.stats,
+    }
     write_json(outdir / "predictions.json", doc)
     return doc
