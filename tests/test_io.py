@@ -95,3 +95,19 @@ def test_degenerate_geometry_is_rejected(tmp_path):
     line = it.Geometry(v, np.array([[0, 1, 2]]), source="line")
     with pytest.raises(it.InputError, match="zero surface area|at least|one line"):
         it.io.validate_geometry(line, min_points=3)
+
+
+def test_write_json_writes_gathered_columns_as_their_arrays(tmp_path):
+    """A Gathered column (what predictions.json's accepted pairs are) is written exactly as
+    the gathered array would be, a block at a time, without being gathered whole."""
+    import json
+
+    from interaction_tensor.io import Gathered, write_json
+
+    rng = np.random.default_rng(3)
+    base = rng.random(250_003)
+    index = np.sort(rng.choice(len(base), 230_001, replace=False)).astype(np.int32)
+    write_json(tmp_path / "a.json", {"g": Gathered(base, index), "n": 2})
+    write_json(tmp_path / "b.json", {"g": base[index], "n": 2})
+    assert (tmp_path / "a.json").read_text() == (tmp_path / "b.json").read_text()
+    assert len(json.loads((tmp_path / "a.json").read_text())["g"]) == len(index)

@@ -99,8 +99,8 @@ class Detection:
     pairs : PairScores of those pairs; ``pairs.accepted`` is the final decision (score and
         clearance)
     score_accepted : (P,) bool, accepted by the score alone
-    clearance_violations : (P,) int, clearance points violated (-1 where not tested: pairs
-        the score rejected, or no clearance test)
+    clearance_violations : (P,) int16 (int32 past 32,767 clearance points), clearance points
+        violated (-1 where not tested: pairs the score rejected, or no clearance test)
     heat : (N,) per scene point: best accepted score near it (0 where none)
     accepted_count : (N,) accepted orientations at each scene point
     predictions : top-k after suppression, best first
@@ -332,8 +332,8 @@ def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_or
     from .clearance import clearance_offsets, count_violations
 
     score_acc = pairs.accepted.copy()
-    viol = np.full(len(pairs.accepted), -1, np.int32)
     k = len(tensor.clearance_points)
+    viol = np.full(len(pairs.accepted), -1, np.int16 if k < 2 ** 15 else np.int32)
     if not settings.clearance or k == 0:
         return score_acc, viol
     idx = np.flatnonzero(score_acc)
@@ -355,6 +355,8 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
     heat, count = heat_map(scene, pair_point, pairs.score, pairs.accepted)
     radius = suppression_radius(tensor, settings)
     acc = np.flatnonzero(pairs.accepted)
+    if len(pair_point) < 2 ** 31:
+        acc = acc.astype(np.int32)
     picks = top_k(scene.points, pairs.score[acc], settings.top_k, radius, index=pair_point[acc])
     predictions = []
     for i in picks:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .io import atomic_path, write_json, write_mesh, write_ply_points
+from .io import Gathered, atomic_path, write_json, write_mesh, write_ply_points
 
 
 @dataclass
@@ -64,12 +64,13 @@ def top_k(positions: np.ndarray, scores: np.ndarray, k: int, radius: float,
     """
     if index is not None:
         index = np.asarray(index)
-        return top_k(_Gathered(positions, index), scores, k, radius)
+        return top_k(Gathered(positions, index), scores, k, radius)
     scores = np.asarray(scores)
     if len(scores) == 0 or k <= 0:
         return []
     order = np.argsort(-scores, kind="stable")          # best first, lower index on ties
-    order = order[np.isfinite(scores[order])]
+    if not np.isfinite(scores).all():
+        order = order[np.isfinite(scores[order])]
     picks: list[int] = []
     r2 = float(radius) ** 2
     block = 4096
@@ -90,16 +91,6 @@ def top_k(positions: np.ndarray, scores: np.ndarray, k: int, radius: float,
             near = ((pos - pos[j]) ** 2).sum(axis=1) <= r2
             free &= ~near
     return picks
-
-
-class _Gathered:
-    """``base[index[i]]`` on indexing with an index array, without gathering all of it."""
-
-    def __init__(self, base, index):
-        self.base, self.index = base, index
-
-    def __getitem__(self, i):
-        return self.base[self.index[i]]
 
 
 def heat_map(scene, pair_point: np.ndarray, pair_score: np.ndarray,
@@ -283,18 +274,18 @@ def export(detection, outdir, scene_name: str | None = None,
     for rank, (v, f) in enumerate(posed_objects(det), 1):
         write_mesh(top / f"top_{rank:02d}.ply", v, f, color=OBJECT_COLOR)
     write_glb(det, outdir / "predictions.glb")
-    # the accepted pairs last: their gathered columns are not held while the above is built
+    # the accepted pairs' columns: gathered a block at a time as io.write_json writes them
     acc = det.accepted
+    if len(det.pair_point) < 2 ** 31:
+        acc = acc.astype(np.int32)
     accepted = {
         "count": int(len(acc)),
         "columns": ["point_index", "orientation_index", "score", "comparisons_to_decision"],
-        # arrays: written a block at a time (io.write_json), not as Python lists
-        "point_index": det.pair_point[acc],
-        "orientation_index": det.pair_orientation[acc],
-        "score": det.pairs.score[acc],
-        "comparisons_to_decision": det.pairs.decided_at[acc],
+        "point_index": Gathered(det.pair_point, acc),
+        "orientation_index": Gathered(det.pair_orientation, acc),
+        "score": Gathered(det.pairs.score, acc),
+        "comparisons_to_decision": Gathered(det.pairs.decided_at, acc),
     }
-    del acc
     doc = {
         "scene": scene_name or det.scene.source,
         "descriptor": descriptor_name or tensor.affordance,
