@@ -276,8 +276,6 @@ def export(detection, outdir, scene_name: str | None = None,
     write_glb(det, outdir / "predictions.glb")
     # the accepted pairs' columns: gathered a block at a time as io.write_json writes them
     acc = det.accepted
-    if len(det.pair_point) < 2 ** 31:
-        acc = acc.astype(np.int32)
     accepted = {
         "count": int(len(acc)),
         "columns": ["point_index", "orientation_index", "score", "comparisons_to_decision"],
