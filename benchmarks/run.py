@@ -4,7 +4,8 @@ Usage::
 
     python benchmarks/run.py                 # everything, writes benchmarks/RESULTS.md/.json
     python benchmarks/run.py --quick         # smaller sample fractions (minutes)
-    python benchmarks/run.py --only train    # one group: train, detect, big, many, torch
+    python benchmarks/run.py --only train    # one group: train, detect, sitting, big, many,
+                                             # torch (--sitting-full: that case's whole run)
 
 Each case runs in its own subprocess so that its peak resident memory is its own.
 The data come from ../shared/data (or $ITENSOR_SHARED_DATA).
@@ -109,9 +110,12 @@ def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
     out = {"scene": scene_name, "scene_points": len(scene), "sample_fraction": fraction,
            "prepare_s": round(prepare_s, 3), "index_s": round(index_s, 3)}
     dets = {}
-    for order in ("weight", "adaptive"):
-        det = it.detect(scene, tensor, it.DetectSettings(sample_fraction=fraction,
-                                                         keypoint_order=order))
+    # the defaults (the neighbour cache at 30 % test points), the adaptive order, and the
+    # grid search alone (the default path before 2026-11-24): same decisions, same run
+    for order, cache in (("weight", None), ("adaptive", None), ("grid", False)):
+        det = it.detect(scene, tensor, it.DetectSettings(
+            sample_fraction=fraction, keypoint_order="weight" if order == "grid" else order,
+            neighbour_cache=cache))
         st = det.stats
         dets[order] = det
         sc = st["seconds"]["scoring"]
@@ -126,10 +130,15 @@ def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
             "keypoint_evaluations_per_s": st["keypoint_comparisons"] / sc,
             "mean_comparisons_per_decision": st["mean_comparisons_per_decision"],
             "top5": _top5(det)}
-    a, w = dets["weight"], dets["adaptive"]     # the default first
+    a, w, g = dets["weight"], dets["adaptive"], dets["grid"]     # the default first
     out["orders_agree"] = {
         "decisions": float(np.mean(a.pairs.accepted == w.pairs.accepted)),
         "top5": _top5(a) == _top5(w)}
+    out["grid_agrees"] = {
+        "decisions": float(np.mean(a.pairs.accepted == g.pairs.accepted)),
+        "scores": bool(np.array_equal(a.pairs.score, g.pairs.score)),
+        "top5": _top5(a) == _top5(g),
+        "speedup": out["grid"]["scoring_s"] / out["weight"]["scoring_s"]}
     # exact reference: every keypoint of every pair, batched cKDTree, no early exit
     rng = np.random.default_rng(0)
     cand = np.sort(rng.choice(a.candidate_indices, size=min(n_ref, len(a.candidate_indices)),
@@ -146,6 +155,11 @@ def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
     s, acc, _, _ = score_pairs_numba(scene.points[pp], po, table, scene.grid(), a.threshold,
                                      tensor.vectors, scene.spacing)
     fast_s = time.perf_counter() - t0
+    # and through the neighbour cache (the default at 30 %): its decisions, not its speed
+    # (1,000 scattered candidates leave each block of it nearly unused)
+    s_c, acc_c, _, _ = score_pairs_numba(scene.points[pp], po, table, scene.grid(), a.threshold,
+                                         tensor.vectors, scene.spacing, cache=True)
+    scene.grid().cache = None
     from interaction_tensor.detect import suppression_radius
     from interaction_tensor.predictions import top_k
 
@@ -160,7 +174,9 @@ def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
         "decision_agreement": float(np.mean(acc == ref.accepted)),
         "accepted_reference": int(ref.accepted.sum()),
         "max_accepted_score_difference": float(np.abs(s[acc & ref.accepted] - ref.score[acc & ref.accepted]).max(initial=0)),
-        "top5_identical": top(s, acc) == top(ref.score, ref.accepted)}
+        "top5_identical": top(s, acc) == top(ref.score, ref.accepted),
+        "cache_decision_agreement": float(np.mean(acc_c == ref.accepted)),
+        "cache_top5_identical": top(s_c, acc_c) == top(ref.score, ref.accepted)}
     return out
 
 
@@ -180,6 +196,73 @@ def case_big(n_points: int, fraction: float) -> dict:
             "candidates": det.stats["candidates_after_normal_filter"],
             "scoring_s": round(det.stats["seconds"]["scoring"], 2),
             "seconds": round(time.perf_counter() - t0, 2)}
+
+
+def case_sitting(scene_name: str, fraction: float, n_patch: int, rounds: int, full: bool) -> dict:
+    """sitting-human (a 1.7 m person: its keypoints lie far from any surface, where the grid
+    search is slowest) on the largest scene: the grid search against the neighbour cache on a
+    dense patch (the ``n_patch`` candidates nearest, in plan, to a seeded random candidate, at
+    the detection's test-point density), interleaved, outputs compared bit for bit; with
+    ``full``, the whole detection at the defaults as well."""
+    import interaction_tensor as it
+    from interaction_tensor import kernels
+    from interaction_tensor.detect import (_test_points, candidate_mask, keypoint_table,
+                                           resolve_threshold)
+    from interaction_tensor.examples import interactions
+
+    tensor = interactions.build_descriptor("sitting-human", objects_dir=DATA / "objects",
+                                           spacing=0.01)
+    scene = it.prepare_scene(it.load_geometry(DATA / "scenes" / f"{scene_name}.ply"), 0.01,
+                             seed=0)
+    grid = scene.grid()
+    st = it.DetectSettings(sample_fraction=fraction).for_scene(scene)
+    test = _test_points(scene, st)
+    cand = test[candidate_mask(scene.normals[test], tensor.affordance_normal,
+                               st.normal_tolerance_deg, st.oriented_normals)]
+    rng = np.random.default_rng(0)
+    centre = scene.points[rng.choice(cand), :2]
+    patch = np.sort(cand[np.argsort(np.linalg.norm(scene.points[cand, :2] - centre, axis=1))
+                         [:n_patch]])
+    n_o = st.n_orientations
+    pp = np.repeat(patch, n_o)
+    job = kernels.ScoreJob(scene.points[pp], np.tile(np.arange(n_o), len(patch)),
+                           keypoint_table(tensor, st), resolve_threshold(tensor, st),
+                           tensor.vectors, scene.spacing, True)
+    kernels.score_jobs([kernels.ScoreJob(job.points[:64], job.orient[:64], job.table,
+                                         job.threshold, job.vectors, job.rho)], grid, False)
+    kernels.score_jobs([kernels.ScoreJob(job.points[:64], job.orient[:64], job.table,
+                                         job.threshold, job.vectors, job.rho)], grid, True)
+    times = {"grid": [], "cache_cold": [], "cache_warm": []}
+    same = True
+    for _ in range(rounds):
+        t0 = time.perf_counter()
+        ref = kernels.score_jobs([job], grid, False)[0]
+        times["grid"].append(time.perf_counter() - t0)
+        grid.cache = None
+        for label in ("cache_cold", "cache_warm"):
+            t0 = time.perf_counter()
+            got = kernels.score_jobs([job], grid, True)[0]
+            times[label].append(time.perf_counter() - t0)
+            same &= all(np.array_equal(x, y) for x, y in zip(ref, got))
+        grid.cache = None
+    med = {k: statistics.median(v) for k, v in times.items()}
+    out = {"scene": scene_name, "scene_points": len(scene), "sample_fraction": fraction,
+           "patch_candidates": int(len(patch)),
+           "patch_extent_m": np.ptp(scene.points[patch, :2], axis=0).round(2).tolist(),
+           "patch_accepted_pairs": int(ref[1].sum()), "patch_pairs": int(len(pp)),
+           "rounds": rounds, "median_s": med,
+           "candidates_per_s": {k: len(patch) / v for k, v in med.items()},
+           "speedup_cold": med["grid"] / med["cache_cold"],
+           "speedup_warm": med["grid"] / med["cache_warm"], "identical": bool(same)}
+    if full:
+        det = it.detect(scene, tensor, it.DetectSettings(sample_fraction=fraction))
+        sd = det.stats
+        out["full"] = {"candidates": sd["candidates_after_normal_filter"],
+                       "pairs": sd["pairs_scored"], "accepted_pairs": sd["pairs_accepted"],
+                       "scoring_s": round(sd["seconds"]["scoring"], 1),
+                       "candidates_per_s": sd["candidates_after_normal_filter"] /
+                       sd["seconds"]["scoring"]}
+    return out
 
 
 def _scaled_descriptors(count: int) -> list:
@@ -261,6 +344,8 @@ def one(argv: list[str]) -> None:
         out = case_train(int(argv[1]))
     elif kind == "detect":
         out = case_detect(argv[1], float(argv[2]), int(argv[3]))
+    elif kind == "sitting":
+        out = case_sitting(argv[1], float(argv[2]), int(argv[3]), int(argv[4]), argv[5] == "1")
     elif kind == "big":
         out = case_big(int(argv[1]), float(argv[2]))
     elif kind == "many":
@@ -422,14 +507,19 @@ def markdown(results: dict) -> str:
     lines += ["## Detection (placing-bowl, paper criterion, weighted keypoints, Numba backend)", "",
               "`weight` is the default keypoint order (the paper's); `adaptive` compares first the "
               "keypoints that fail most often on a pilot. Both decide exactly alike; only the "
-              "partial scores kept by rejected pairs differ (README).", "",
+              "partial scores kept by rejected pairs differ (README). Both answer nearest "
+              "neighbours from the neighbour cache, the default at 30 % test points; `grid` is "
+              "the weight order through the grid search alone, the default path before "
+              "2026-11-24, in the same run.", "",
               "Rates count the work done: a candidate is a test point that passed the normal "
               "filter, scored in all 8 orientations; a pair is one (candidate, orientation). "
               "Sampled test points are a count, not a rate.", "",
               "| scene | points | fraction | order | test points sampled | candidates | scoring s | candidates/s | pairs/s | keypoint evals/s | comparisons/decision | peak MB |",
               "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for d in results["detect"]:
-        for order in ("weight", "adaptive"):
+        for order in ("weight", "adaptive", "grid"):
+            if order not in d:
+                continue
             o = d[order]
             lines.append(f"| {d['scene']} | {d['scene_points']} | {d['sample_fraction']} | {order} | "
                          f"{o['test_points']} | {o['candidates']} | {o['scoring_s']:.1f} | "
@@ -440,6 +530,13 @@ def markdown(results: dict) -> str:
     lines += ["", "Weight against adaptive order: " + "; ".join(
         f"{d['scene']}: {100 * d['orders_agree']['decisions']:.2f} % identical decisions, "
         f"identical top 5: {d['orders_agree']['top5']}" for d in results["detect"]) + "."]
+    if all("grid_agrees" in d for d in results["detect"]):
+        lines += ["", "Neighbour cache (default) against the grid search alone, same run: " +
+                  "; ".join(f"{d['scene']}: **{d['grid_agrees']['speedup']:.2f}x** the "
+                            f"candidates/s, {100 * d['grid_agrees']['decisions']:.2f} % identical "
+                            f"decisions, identical scores: {d['grid_agrees']['scores']}, "
+                            f"identical top 5: {d['grid_agrees']['top5']}"
+                            for d in results["detect"]) + "."]
     lines += ["", "### Against the exact reference (same candidates, all 512 keypoints, batched cKDTree, no early exit)", "",
               "| scene | candidates | reference cand/s | fast cand/s | speed-up | identical decisions | identical top 5 |",
               "|---|---|---|---|---|---|---|"]
@@ -449,6 +546,35 @@ def markdown(results: dict) -> str:
                      f"{r['candidates'] / r['fast_seconds_same_subset']:.0f} | "
                      f"{r['speedup']:.1f}x | {100 * r['decision_agreement']:.2f} % | "
                      f"{r['top5_identical']} |")
+    if all("cache_decision_agreement" in d["reference"] for d in results["detect"]):
+        lines += ["", "Through the neighbour cache, the same candidates decide as the reference "
+                  "does: " + "; ".join(
+                      f"{d['scene']}: {100 * d['reference']['cache_decision_agreement']:.2f} %, "
+                      f"identical top 5: {d['reference']['cache_top5_identical']}"
+                      for d in results["detect"]) + "."]
+    if "sitting" in results:
+        si = results["sitting"]
+        cps = si["candidates_per_s"]
+        lines += ["", f"## Sitting (sitting-human on {si['scene']}, {si['scene_points']} points, "
+                  f"{si['sample_fraction']:.0%} test points)", "",
+                  f"A dense patch: the {si['patch_candidates']} candidates nearest in plan to a "
+                  f"seeded random one ({si['patch_extent_m'][0]} x {si['patch_extent_m'][1]} m, "
+                  f"{si['patch_pairs']} pairs, {si['patch_accepted_pairs']} accepted), scored "
+                  f"{si['rounds']} times interleaved; medians. A person's keypoints lie far from "
+                  "the surfaces, where the grid search visits many cells.", "",
+                  "| path | seconds | candidates/s | against the grid search |", "|---|---|---|---|",
+                  f"| grid search | {si['median_s']['grid']:.2f} | {cps['grid']:.0f} | 1.00x |",
+                  f"| neighbour cache, from empty | {si['median_s']['cache_cold']:.2f} | "
+                  f"{cps['cache_cold']:.0f} | **{si['speedup_cold']:.2f}x** |",
+                  f"| neighbour cache, built | {si['median_s']['cache_warm']:.2f} | "
+                  f"{cps['cache_warm']:.0f} | {si['speedup_warm']:.2f}x |", "",
+                  f"Outputs bit-identical to the grid search's: {si['identical']}."]
+        if "full" in si:
+            f = si["full"]
+            lines += ["", f"The whole detection at the defaults (neighbour cache): "
+                      f"{f['candidates']} candidates, {f['pairs']} pairs ({f['accepted_pairs']} "
+                      f"accepted), scoring {f['scoring_s']} s = **{f['candidates_per_s']:.0f} "
+                      "candidates/s**."]
     b = results["big"]
     lines += ["", "## A 5-million-point scene", "",
               f"kitchen5 sampled at {b['spacing'] * 1000:.1f} mm: {b['scene_points']} points, "
@@ -529,7 +655,10 @@ def main() -> None:
         return
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="smaller fractions, fewer repeats")
-    ap.add_argument("--only", choices=("train", "detect", "big", "many", "torch"), default=None)
+    ap.add_argument("--only", choices=("train", "detect", "sitting", "big", "many", "torch"),
+                    default=None)
+    ap.add_argument("--sitting-full", action="store_true",
+                    help="the sitting case also runs the whole detection (about 10 min)")
     ap.add_argument("--out", default=str(HERE / "RESULTS"))
     ap.add_argument("--render", action="store_true",
                     help="only rewrite OUT.md from the figures recorded in OUT.json")
@@ -548,6 +677,10 @@ def main() -> None:
     if args.only in (None, "detect"):
         results["detect"] = [run_case(["detect", name, str(fraction), "1000"])
                              for name in ("kitchen5", largest_scene())]
+    if args.only in (None, "sitting"):
+        results["sitting"] = run_case(["sitting", largest_scene(), str(fraction),
+                                       "300" if args.quick else "1500", "3",
+                                       "1" if args.sitting_full else "0"])
     if args.only in (None, "big"):
         results["big"] = run_case(["big", "5000000", "0.01" if args.quick else "0.30"])
     if args.only in (None, "many"):

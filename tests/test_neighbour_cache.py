@@ -7,6 +7,7 @@ import pytest
 
 import interaction_tensor as it
 from interaction_tensor.detect import keypoint_table
+from interaction_tensor import kernels
 from interaction_tensor.kernels import score_pairs_numba
 
 from conftest import corner_example
@@ -36,11 +37,68 @@ def test_cached_scoring_is_bit_identical(criterion, vectors):
                 assert np.array_equal(a, b)
 
 
-def test_detection_with_the_cache_decides_alike():
+def test_detection_with_the_cache_decides_alike(monkeypatch):
+    """Grid search (False), auto (None: dense test points, so the cache, within a budget
+    per scene point that here is ample, forces resets, or leaves no room at all) and a kept
+    cache (True) give bit-identical pairs; auto drops its cache when the search ends."""
+    import sys
+
     q, s = corner_example()
     t = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1))
     scene = it.prepare_scene(s, 0.01, seed=2)
-    a = it.detect(scene, t, it.DetectSettings(sample_fraction=0.4))
-    b = it.detect(scene, t, it.DetectSettings(sample_fraction=0.4, neighbour_cache=True))
-    assert np.array_equal(a.pairs.score, b.pairs.score)
-    assert np.array_equal(a.pairs.accepted, b.pairs.accepted)
+
+    def run(mode):
+        det = it.detect(scene, t, it.DetectSettings(sample_fraction=0.4, neighbour_cache=mode,
+                                                    batch_size=256))
+        assert (scene.grid().cache is not None) == (mode is True)
+        return det.pairs
+
+    plain = run(False)
+    assert plain.accepted.any() and not plain.accepted.all()
+    budgets = []
+    for mode, per_point in ((None, 64), (None, 8), (None, 1), (True, 64)):
+        monkeypatch.setattr(sys.modules["interaction_tensor.detect"],
+                            "CACHE_AUTO_BYTES_PER_POINT", per_point)
+        got = run(mode)
+        for name in ("score", "accepted", "decided_at"):
+            assert np.array_equal(getattr(plain, name), getattr(got, name)), (mode, per_point)
+        assert got.comparisons == plain.comparisons
+        if mode is True:
+            budgets.append(scene.grid().cache.budget)
+    assert budgets == [kernels.CACHE_BYTES]
+
+
+def test_auto_cache_follows_the_test_point_density():
+    from interaction_tensor.detect import CACHE_AUTO_FRACTION, cache_pays
+
+    auto = it.DetectSettings()
+    assert auto.neighbour_cache is None
+    assert cache_pays(auto, 0.3) and cache_pays(auto, CACHE_AUTO_FRACTION)
+    assert not cache_pays(auto, 0.05)
+    assert cache_pays(it.DetectSettings(neighbour_cache=True), 0.001)
+    assert not cache_pays(it.DetectSettings(neighbour_cache=False), 1.0)
+
+
+def test_spatial_order_keeps_each_candidate_whole():
+    from interaction_tensor.detect import _pairs_of, spatial_order
+
+    rng = np.random.default_rng(4)
+    pts = rng.random((500, 3))
+    cand = np.sort(rng.choice(500, 120, replace=False))
+    pp = np.repeat(cand, 8)
+    from types import SimpleNamespace
+
+    order = spatial_order(pts, pp, 8, SimpleNamespace(origin=np.zeros(3), cell=0.1))
+    assert sorted(order.tolist()) == list(range(120))       # a permutation of candidates
+    pairs = _pairs_of(order, 8)
+    assert np.array_equal(np.sort(pairs), np.arange(960))
+    assert np.all(pp[pairs].reshape(-1, 8) == pp[pairs][::8, None])   # runs of one point
+    # nearby candidates come together: Z-order cells are contiguous
+    cells = np.floor(pts[cand[order]] / 0.1).astype(int)
+    keys = [tuple(c) for c in cells]
+    seen, last = set(), None
+    for k in keys:
+        if k != last:
+            assert k not in seen
+            seen.add(k)
+        last = k

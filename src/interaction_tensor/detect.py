@@ -16,9 +16,16 @@ import numpy as np
 
 from .predictions import Prediction, heat_map, top_k
 from .scene import Scene
-from .kernels import ScoreJob, score_jobs
+from .kernels import CACHE_BYTES, ScoreJob, score_jobs
 from .scoring import PairScores, all_terms, make_table, permuted, score_pairs
 from .settings import DetectSettings
+
+#: Auto neighbour cache (``DetectSettings.neighbour_cache`` None): used when at least this
+#: fraction of the scene's points is tested (see :func:`cache_pays`; benchmarks/RESULTS.md).
+CACHE_AUTO_FRACTION = 0.1
+#: Memory of the auto neighbour cache, per scene point (bytes; at most
+#: :data:`kernels.CACHE_BYTES`): past it the cache is emptied and rebuilt where needed.
+CACHE_AUTO_BYTES_PER_POINT = 64
 
 if TYPE_CHECKING:   # annotations only: descriptor imports this module to calibrate
     from .descriptor import InteractionTensor
@@ -277,11 +284,40 @@ def pilot_order(table, scene: Scene, pair_point: np.ndarray, orient: np.ndarray,
     return np.argsort(-shortfall, kind="stable")
 
 
-def _score_all(scene, jobs, backend, index, settings, progress, label):
+def spatial_order(points: np.ndarray, pair_points: np.ndarray, n_o: int, grid) -> np.ndarray:
+    """Candidates (runs of ``n_o`` pairs of one scene point each, as :func:`detect_many`
+    makes them) in Z-order of their points over the grid's cells: (C,) int64 candidate
+    numbers, stable (ties keep their order)."""
+    from .kernels import _compile
+
+    cand = pair_points[::n_o]
+    q = np.ascontiguousarray(points[cand], dtype=np.float64)
+    return _compile()["morton_order"](q, np.asarray(grid.origin, np.float64), float(grid.cell))
+
+
+def _pairs_of(cands: np.ndarray, n_o: int) -> np.ndarray:
+    """Pair indices of candidates ``cands`` (each candidate's ``n_o`` pairs, in order)."""
+    return (cands[:, None] * n_o + np.arange(n_o)).ravel()
+
+
+def cache_pays(settings: DetectSettings, test_fraction: float) -> bool:
+    """Whether the Numba backend answers nearest neighbours from the neighbour cache:
+    ``settings.neighbour_cache`` when set, else (auto) when the test points are dense
+    enough that each block of space is queried many times (at least
+    :data:`CACHE_AUTO_FRACTION` of the scene's points tested)."""
+    if settings.neighbour_cache is not None:
+        return bool(settings.neighbour_cache)
+    return test_fraction >= CACHE_AUTO_FRACTION
+
+
+def _score_all(scene, jobs, backend, index, settings, progress, label, use_cache=False,
+               cache_bytes=None):
     """Score every job's pairs in candidate batches; returns per job PairScores.
 
     Here a job's ``points`` are scene indices, gathered batch by batch to bound memory;
-    ``index`` is the backend's search structure (Numba grid, TorchIndex, or None for cKDTree).
+    ``index`` is the backend's search structure (Numba grid, TorchIndex, or None for cKDTree);
+    ``use_cache``: the Numba backend's neighbour cache (see :func:`cache_pays`), of at most
+    ``cache_bytes`` bytes (None: :data:`kernels.CACHE_BYTES`).
     """
     n_o = settings.n_orientations
     step = settings.batch_size * n_o
@@ -294,13 +330,19 @@ def _score_all(scene, jobs, backend, index, settings, progress, label):
     if progress:
         from tqdm import tqdm
         bar = tqdm(total=longest // n_o, unit="pt", desc=f"detect {label}", leave=False)
+    # Numba: candidates in Z-order, so that a batch's keypoints stay in a compact region and
+    # consecutive batches overlap (the neighbour cache is built once where they go)
+    zorder = ([spatial_order(scene.points, j.points, n_o, index) for j in jobs]
+              if backend == "numba" else None)
     for start in range(0, longest, step):
         sl = slice(start, start + step)
         if backend == "numba":
-            batch = [ScoreJob(scene.points[j.points[sl]], j.orient[sl], j.table, j.threshold, j.vectors,
-                              j.rho, j.early_exit) for j in jobs]
-            for i, (s, a, d, c) in enumerate(score_jobs(batch, index, settings.neighbour_cache)):
-                totals[i][sl], acc[i][sl], at[i][sl] = s, a, d
+            picks = [_pairs_of(z[start // n_o:(start + step) // n_o], n_o) for z in zorder]
+            batch = [ScoreJob(scene.points[j.points[pk]], j.orient[pk], j.table, j.threshold,
+                              j.vectors, j.rho, j.early_exit) for j, pk in zip(jobs, picks)]
+            for i, (s, a, d, c) in enumerate(score_jobs(batch, index, use_cache,
+                                                        cache_bytes or CACHE_BYTES)):
+                totals[i][picks[i]], acc[i][picks[i]], at[i][picks[i]] = s, a, d
                 cmp_[i] += int(c.sum())
         else:
             for i, j in enumerate(jobs):
@@ -454,7 +496,13 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
         timings["keypoint_order"] = time.perf_counter() - t1
     t2 = time.perf_counter()
     label = tensors[0].affordance if len(tensors) == 1 else f"{len(tensors)} affordances"
-    scores = _score_all(scene, jobs, backend, index, settings, progress, label)
+    use_cache = backend == "numba" and cache_pays(settings, len(test_idx) / max(len(scene), 1))
+    auto = settings.neighbour_cache is None
+    budget = min(CACHE_BYTES, CACHE_AUTO_BYTES_PER_POINT * len(scene)) if auto else CACHE_BYTES
+    scores = _score_all(scene, jobs, backend, index, settings, progress, label, use_cache,
+                        budget)
+    if use_cache and auto:
+        index.cache = None      # auto: its memory goes back before clearance and export
     timings["scoring"] = time.perf_counter() - t2
     t3 = time.perf_counter()
     grid = index if backend == "numba" else None

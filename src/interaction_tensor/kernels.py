@@ -4,10 +4,11 @@ These compute the same thing as :func:`interaction_tensor.scoring.score_pairs` w
 cKDTree, one (test point, orientation) pair per thread, keypoints in weight order, stopping a
 pair as soon as its decision is known. Every nearest neighbour is exact: the grid's shell
 search visits shells of cells around the query until no unvisited cell can hold a closer
-point. With :data:`NEIGHBOUR_CACHE` set, :func:`score_jobs` answers them instead from a
-:class:`NeighbourCache` kept on the grid (octrees of "which samples can be nearest in this
-box" lists, built where the queries go; bit-identical results), which pays off only when the
-same space is queried many times (see benchmarks/kernel_speed.py).
+point. With ``cache`` (detection: where test points are dense), :func:`score_jobs` answers
+them instead from a :class:`NeighbourCache` kept on the grid (octrees of "which samples can
+be nearest in this box" lists, built where the queries go; bit-identical results), which
+pays off only when the same space is queried many times (see benchmarks/kernel_speed.py and
+benchmarks/run.py).
 
 Numba is imported lazily; :func:`available` says whether it can be used.
 """
@@ -25,9 +26,11 @@ _KERNELS = None
 MAX_CELLS = 20_000_000
 #: Pairs per work unit handed to a thread by the scoring kernel.
 PARALLEL_CHUNK = 64
-#: Score through the :class:`NeighbourCache` (same results). Off: building it costs more
-#: than it saves at the usual test point densities (benchmarks/kernel_speed.py: 0.9x on
-#: kitchen5 at 5 %, 0.4x on living-room4; 1.8x and 5.9x once built).
+#: :func:`score_jobs` without a ``cache`` argument scores through the :class:`NeighbourCache`
+#: (same results). Off: building it costs more than it saves on scattered queries
+#: (benchmarks/kernel_speed.py: 0.9x on 3,000 random kitchen5 candidates, 0.4x on
+#: living-room4; 1.8x and 5.9x once built); :func:`detect.cache_pays` turns it on where test
+#: points are dense (1.5x on the whole of kitchen5 at 30 %, 3.8x for sitting on living-room4).
 NEIGHBOUR_CACHE = False
 #: Neighbour cache (see :class:`NeighbourCache`). Root block edge, in grid cells (a grid cell
 #: is 3 spacings, so 4 spacings).
@@ -242,7 +245,8 @@ class NeighbourCache:
     resets : times the cache was emptied for memory
     """
 
-    def __init__(self, grid: Grid, lo: np.ndarray, hi: np.ndarray):
+    def __init__(self, grid: Grid, lo: np.ndarray, hi: np.ndarray, budget: int = CACHE_BYTES):
+        self.budget = int(budget)
         lo = np.asarray(lo, np.float64)
         hi = np.asarray(hi, np.float64)
         hb = CACHE_ROOT_CELLS * grid.cell
@@ -283,17 +287,17 @@ class NeighbourCache:
 
     def _reserve(self, nodes: int, entries: int) -> bool:
         """Room for ``nodes`` more nodes and ``entries`` more list entries: False when that
-        would pass :data:`CACHE_BYTES` (the caller empties the cache)."""
+        would pass its ``budget`` (bytes; the caller empties the cache)."""
         need_n = int(self.used[0]) + nodes
         need_e = int(self.used[1]) + entries
         cap_n, cap_e = len(self.child), len(self.lists)
         if need_n <= cap_n and need_e <= cap_e:
             return True
-        if self.root.nbytes + need_n * 16 + need_e * 4 > CACHE_BYTES:
+        if self.root.nbytes + need_n * 16 + need_e * 4 > self.budget:
             return False
         new_n = cap_n if need_n <= cap_n else max(need_n, 2 * cap_n)
         new_e = cap_e if need_e <= cap_e else max(need_e, 2 * cap_e)
-        if self.root.nbytes + new_n * 16 + new_e * 4 > CACHE_BYTES:
+        if self.root.nbytes + new_n * 16 + new_e * 4 > self.budget:
             new_n, new_e = max(cap_n, need_n), max(cap_e, need_e)
         n0, e0 = int(self.used[0]), int(self.used[1])
         if new_n > cap_n:
@@ -377,8 +381,10 @@ def _block_occupancy(grid: Grid, cb: int) -> np.ndarray:
     return np.ascontiguousarray(occ.ravel(), dtype=np.int8)
 
 
-def _cache_for(grid: Grid, points: np.ndarray, offsets: np.ndarray) -> NeighbourCache:
-    """The grid's cache, (re)made to cover the scene and every query of these pairs."""
+def _cache_for(grid: Grid, points: np.ndarray, offsets: np.ndarray,
+               budget: int = CACHE_BYTES) -> NeighbourCache:
+    """The grid's cache, (re)made to cover the scene and every query of these pairs, held to
+    ``budget`` bytes (emptied if it holds more)."""
     reach = np.abs(offsets).reshape(-1, 3).max(axis=0) + grid.cell
     scene_lo = grid.origin
     scene_hi = grid.origin + grid.dims * grid.cell
@@ -388,16 +394,24 @@ def _cache_for(grid: Grid, points: np.ndarray, offsets: np.ndarray) -> Neighbour
     if cache is None or not cache.covers(lo, hi):
         if cache is not None:
             lo, hi = np.minimum(lo, cache.lo), np.maximum(hi, cache.hi)
-        grid.cache = cache = NeighbourCache(grid, lo, hi)
+        grid.cache = cache = NeighbourCache(grid, lo, hi, budget)
+    elif cache.budget != budget:
+        cache.budget = int(budget)
+        if cache.nbytes > budget:
+            cache.child, cache.lstart, cache.llen, cache.lists = (
+                a[:1 << 10].copy() for a in (cache.child, cache.lstart, cache.llen, cache.lists))
+            cache._reset()
     return cache
 
 
-def score_jobs(jobs: list, grid: Grid, cache: bool | None = None) -> list:
+def score_jobs(jobs: list, grid: Grid, cache: bool | None = None,
+               cache_bytes: int = CACHE_BYTES) -> list:
     """Score several jobs (e.g. several affordances) over one scene grid.
 
     Every nearest neighbour is exact: the results are identical to
     :func:`interaction_tensor.scoring.score_pairs`, and bit for bit the same with or
-    without the neighbour cache (``cache``; None: :data:`NEIGHBOUR_CACHE`). Returns, per
+    without the neighbour cache (``cache``; None: :data:`NEIGHBOUR_CACHE`; at most
+    ``cache_bytes`` bytes, emptied and rebuilt where needed past it). Returns, per
     job, (score, accepted, decided_at, comparisons) arrays over its pairs.
     """
     use_cache = NEIGHBOUR_CACHE if cache is None else bool(cache)
@@ -415,7 +429,7 @@ def score_jobs(jobs: list, grid: Grid, cache: bool | None = None) -> list:
                 tp = np.ascontiguousarray(job.points, dtype=np.float64)
                 orient = np.ascontiguousarray(job.orient, np.int64)
                 if use_cache:
-                    _score_cached(job, tp, orient, grid, out)
+                    _score_cached(job, tp, orient, grid, out, cache_bytes)
                 else:
                     _compile()["score"](tp, orient, *_job_args(job, grid), *out)
             finally:
@@ -424,7 +438,8 @@ def score_jobs(jobs: list, grid: Grid, cache: bool | None = None) -> list:
     return outs
 
 
-def _score_cached(job: ScoreJob, tp: np.ndarray, orient: np.ndarray, grid: Grid, out: tuple):
+def _score_cached(job: ScoreJob, tp: np.ndarray, orient: np.ndarray, grid: Grid, out: tuple,
+                  budget: int = CACHE_BYTES):
     """One job through the grid's :class:`NeighbourCache`: pairs in Z-order of their test
     points, in rounds (:data:`CACHE_FIRST_ROUND` pairs, doubling up to :data:`CACHE_ROUND`);
     before a round the root blocks under the keypoints most pairs reached last round are
@@ -433,7 +448,7 @@ def _score_cached(job: ScoreJob, tp: np.ndarray, orient: np.ndarray, grid: Grid,
     p = len(tp)
     args = _job_args(job, grid)
     args = args[:6] + args[7:]                  # score_cached has no max_terms
-    cache = _cache_for(grid, tp, args[0])
+    cache = _cache_for(grid, tp, args[0], budget)
     perm = k["morton_order"](tp, cache.lo, cache.hb)
     n = min(CACHE_ROUND, p)
     req = np.empty((n, CACHE_REQUESTS), np.int64)

@@ -173,10 +173,11 @@ class DetectSettings:
     #: present (see ``device``), same decisions as the CPU paths.
     backend: str = "auto"
     #: Numba backend: answer nearest-neighbour queries from a cache of per-block candidate
-    #: lists kept on the scene's grid (exact, identical results). It costs more than it
-    #: saves on a single search and pays off when one scene is searched again and again
-    #: (many affordances, the evaluation): 2-3.7x on the second search of kitchen5 (ours).
-    neighbour_cache: bool = False
+    #: lists on the scene's grid (exact: identical results). None (auto): when at least 10 %
+    #: of the scene's points are tested (the default 30 % is), and dropped when the search
+    #: ends; True: always, kept on the grid for later searches of the same scene (many
+    #: affordances, the evaluation); False: the grid search alone.
+    neighbour_cache: bool | None = None
     #: Torch device of the ``torch`` backend; None: ``cuda`` when present, else ``cpu``.
     device: str | None = None
     #: Seed of the test-point draw and of scene sampling.
