@@ -24,8 +24,10 @@ from .settings import DetectSettings
 #: fraction of the scene's points is tested (see :func:`cache_pays`; benchmarks/RESULTS.md).
 CACHE_AUTO_FRACTION = 0.1
 #: Memory of the auto neighbour cache, per scene point (bytes; at most
-#: :data:`kernels.CACHE_BYTES`): past it the cache is emptied and rebuilt where needed.
-CACHE_AUTO_BYTES_PER_POINT = 64
+#: :data:`kernels.CACHE_BYTES`): past it the cache is emptied and rebuilt where needed. 24
+#: keeps a 2 M-point cloud at the defaults under 250 bytes a point (benchmarks/memory.py:
+#: 476 MB; 64 gave 616 MB).
+CACHE_AUTO_BYTES_PER_POINT = 24
 
 if TYPE_CHECKING:   # annotations only: descriptor imports this module to calibrate
     from .descriptor import InteractionTensor

@@ -30,7 +30,8 @@ PARALLEL_CHUNK = 64
 #: (same results). Off: building it costs more than it saves on scattered queries
 #: (benchmarks/kernel_speed.py: 0.9x on 3,000 random kitchen5 candidates, 0.4x on
 #: living-room4; 1.8x and 5.9x once built); :func:`detect.cache_pays` turns it on where test
-#: points are dense (1.5x on the whole of kitchen5 at 30 %, 3.8x for sitting on living-room4).
+#: points are dense (benchmarks/run.py: 1.78x on kitchen5 at 30 %, 2.65x on living-room4;
+#: sitting on living-room4, a dense patch from an empty cache: 4.6x).
 NEIGHBOUR_CACHE = False
 #: Neighbour cache (see :class:`NeighbourCache`). Root block edge, in grid cells (a grid cell
 #: is 3 spacings, so 4 spacings).

@@ -201,8 +201,9 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                         sample_fraction=frac, keypoints=kp, top_k=0, seed=st.seed,
                         # the exact neighbour cache, kept on the scene's grid for every
                         # example of the scene: at 30 % test points it pays for persons as
-                        # well (living-room4, sitting: 3.8x the grid search, 2026-11-24;
-                        # at 2,000 test points building it took 83 % of the time)
+                        # well (living-room4, sitting, a dense patch from an empty cache: 4.6x
+                        # the grid search, benchmarks/run.py; at 2,000 test points building it
+                        # took 83 % of the time)
                         neighbour_cache=True if frac >= CACHE_AUTO_FRACTION else None))
                     cand = det.candidate_indices
                     point, orient = det.pair_point, det.pair_orientation
