@@ -509,8 +509,8 @@ def markdown(results: dict) -> str:
               "keypoints that fail most often on a pilot. Both decide exactly alike; only the "
               "partial scores kept by rejected pairs differ (README). Both answer nearest "
               "neighbours from the neighbour cache, the default at 30 % test points; `grid` is "
-              "the weight order through the grid search alone, the default path before "
-              "2026-11-24, in the same run.", "",
+              "the weight order through the grid search alone (the default before 2026-11-24, "
+              "here with the same Z-ordered batches), in the same run.", "",
               "Rates count the work done: a candidate is a test point that passed the normal "
               "filter, scored in all 8 orientations; a pair is one (candidate, orientation). "
               "Sampled test points are a count, not a rate.", "",
