@@ -102,3 +102,45 @@ def test_spatial_order_keeps_each_candidate_whole():
             assert k not in seen
             seen.add(k)
         last = k
+
+
+def test_a_cache_over_its_budget_drops_its_oldest_trees_and_stays_exact():
+    """Past its budget the cache drops its oldest trees and moves the rest to the front
+    (or, with too little room for that, empties itself): answers stay bit-identical, its
+    arrays stay within the budget, and only the pages of built blocks are kept."""
+    q, s = corner_example()
+    t = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1))
+    scene = it.prepare_scene(s, 0.01, seed=2)
+    rng = np.random.default_rng(5)
+    idx = rng.choice(len(scene), 4000, replace=False)
+    job = kernels.ScoreJob(scene.points[idx], rng.integers(0, 8, len(idx)),
+                           keypoint_table(t, it.DetectSettings()), 0.6, t.vectors,
+                           scene.spacing, True)
+    grid = scene.grid()
+    plain = kernels.score_jobs([job], grid, False)[0]
+    grid.cache = None
+    kernels.score_jobs([job], grid, True)
+    full = grid.cache
+    assert full.evictions == full.resets == 0
+    built = int((full.pool >= 0).sum())
+    assert built > 100 and int((full.owner >= 0).sum()) < len(full.ptab)
+    trees = int(full.used[0]) * 16 + int(full.used[1]) * 4
+    seen = set()
+    for share in (0.6, 0.25, 0.02):
+        grid.cache = None
+        budget = int(share * trees) + full.table_bytes
+        got = kernels.score_jobs([job], grid, True, budget)[0]
+        for a, b in zip(plain, got):
+            assert np.array_equal(a, b), share
+        c = grid.cache
+        assert c.nbytes <= budget
+        seen.add((c.evictions > 0, c.resets > 0))
+        # a block's page is held only while one of its group's blocks is built or marked
+        held = np.flatnonzero(c.owner >= 0)
+        assert np.all(c.ptab[c.owner[held]] == held)
+        assert np.all((c.pool.reshape(-1, kernels.PAGE ** 3)[held] != -1).any(axis=1))
+        assert int((c.ptab >= 0).sum()) == len(held)
+        # every built block's tree lies in the used part of the arrays
+        roots = c.pool[c.pool >= 0]
+        assert np.all(roots < c.used[0])
+    assert any(e for e, _ in seen) and any(r for _, r in seen)    # both ways were taken

@@ -23,6 +23,8 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from .kernels import PAGE, PAGE_BITS
+
 
 @njit(cache=True, inline="always")
 def _gap(f, c, d):
@@ -221,9 +223,11 @@ def score(tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, max_terms, 
 
 # --------------------------------------------------------------------- neighbour cache
 # Cache layout (arrays owned by kernels.NeighbourCache):
-#   root (B,) int32 over a block grid (origin ``bo``, block edge ``hb`` (m), ``bdims`` blocks
-#       per axis, block (i, j, k) at (i * bdims[1] + j) * bdims[2] + k): the root node of each
-#       block, -1 not built, -2 requested, -3 not to be built (grid search)
+#   root blocks on a block grid (origin ``bo``, block edge ``hb`` (m), ``bdims`` blocks per
+#       axis, block (i, j, k) numbered (i * bdims[1] + j) * bdims[2] + k); their entries: the
+#       root node, -1 not built, -2 requested, -3 not to be built (grid search), kept in
+#       pages of PAGE^3 blocks: ``ptab`` (one int32 per PAGE^3 group of blocks, ``pdims``
+#       groups per axis) gives the group's page or -1, ``pool`` holds the pages (:func:`_slot`)
 #   child (M,) int32: first of the node's 8 children (octant = 4 x-high + 2 y-high + z-high),
 #       -1 for a leaf
 #   lstart (M,) int64, llen (M,) int32: a leaf's candidate list is
@@ -428,7 +432,28 @@ def _nearest_call(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz):
 
 
 @njit(cache=True, inline="always")
-def _leaf(qx, qy, qz, root, bo, hb, bdims, child):
+def _slot(bi, bj, bk, ptab, pdims):
+    """Where root block (bi, bj, bk)'s entry lies in the page pool (pages of PAGE^3 blocks,
+    ``ptab``: page of each PAGE^3 group of blocks, -1 none), or -1 when its page is not
+    allocated (the block is not built)."""
+    pg = ptab[((bi >> PAGE_BITS) * pdims[1] + (bj >> PAGE_BITS)) * pdims[2] + (bk >> PAGE_BITS)]
+    if pg < 0:
+        return -1
+    m = PAGE - 1
+    return ((pg * PAGE + (bi & m)) * PAGE + (bj & m)) * PAGE + (bk & m)
+
+
+@njit(cache=True, inline="always")
+def _block_slot(b, bdims, ptab, pdims):
+    """:func:`_slot` of root block b (linear index on the block grid)."""
+    bk = b % bdims[2]
+    bj = (b // bdims[2]) % bdims[1]
+    bi = b // (bdims[2] * bdims[1])
+    return _slot(bi, bj, bk, ptab, pdims)
+
+
+@njit(cache=True, inline="always")
+def _leaf(qx, qy, qz, ptab, pdims, pool, bo, hb, bdims, child):
     """Leaf of the cache holding q (>= 0), or -1 outside the cache's blocks, or -(b + 2)
     when q's root block b is not built."""
     fi = math.floor((qx - bo[0]) / hb)
@@ -440,7 +465,8 @@ def _leaf(qx, qy, qz, root, bo, hb, bdims, child):
     bj = int(fj)
     bk = int(fk)
     b = (bi * bdims[1] + bj) * bdims[2] + bk
-    n = root[b]
+    sl = _slot(bi, bj, bk, ptab, pdims)
+    n = pool[sl] if sl >= 0 else -1
     if n < 0:
         return -(b + 2) if n == -1 else -1
     lx = bo[0] + bi * hb
@@ -490,7 +516,7 @@ LOOKAHEAD = 8
 def score_cached(perm, tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, rest,
                  criterion, c, a, wsum, threshold, early_exit, surface, rho,
                  pts, nrm, starts, seed, origin, cell, dims,
-                 root, bo, hb, bdims, child, lstart, llen, lists, scan_max,
+                 ptab, pdims, pool, bo, hb, bdims, child, lstart, llen, lists, scan_max,
                  req, nreq, out_score, out_acc, out_at, out_cmp):
     """Score pairs ``perm`` (indices into tp / orient / outputs) with the neighbour cache.
 
@@ -519,7 +545,8 @@ def score_cached(perm, tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w
             k1 = min(k0 + LOOKAHEAD, nk)
             for k in range(k0, k1):
                 leaves[k - k0] = _leaf(tp[i, 0] + offsets[o, k, 0], tp[i, 1] + offsets[o, k, 1],
-                                       tp[i, 2] + offsets[o, k, 2], root, bo, hb, bdims, child)
+                                       tp[i, 2] + offsets[o, k, 2], ptab, pdims, pool, bo, hb,
+                                       bdims, child)
             for k in range(k0, k1):
                 qx = tp[i, 0] + offsets[o, k, 0]
                 qy = tp[i, 1] + offsets[o, k, 1]
@@ -562,10 +589,10 @@ def score_cached(perm, tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w
 
 
 @njit(cache=True, parallel=True)
-def touched_roots(perm, tp, orient, offsets, n_keys, root, bo, hb, bdims, out):
-    """Unbuilt root blocks (``root`` -1) under keypoints ``0..n_keys - 1`` of pairs ``perm``:
-    ``out[j, k]`` the block of keypoint k of pair perm[j], or -1 (built, requested, or
-    outside the cache's blocks)."""
+def touched_roots(perm, tp, orient, offsets, n_keys, ptab, pdims, pool, bo, hb, bdims, out):
+    """Unbuilt root blocks (no page, or -1 in the pool) under keypoints ``0..n_keys - 1``
+    of pairs ``perm``: ``out[j, k]`` the block of keypoint k of pair perm[j], or -1 (built,
+    requested, or outside the cache's blocks)."""
     for j in prange(perm.shape[0]):
         i = perm[j]
         o = orient[i]
@@ -577,25 +604,29 @@ def touched_roots(perm, tp, orient, offsets, n_keys, root, bo, hb, bdims, out):
             if (fi < 0 or fj < 0 or fk < 0 or fi >= bdims[0] or fj >= bdims[1] or
                     fk >= bdims[2]):
                 continue
-            b = (int(fi) * bdims[1] + int(fj)) * bdims[2] + int(fk)
-            if root[b] == -1:
-                out[j, k] = b
+            bi, bj, bk = int(fi), int(fj), int(fk)
+            sl = _slot(bi, bj, bk, ptab, pdims)
+            if sl < 0 or pool[sl] == -1:
+                out[j, k] = (bi * bdims[1] + bj) * bdims[2] + bk
 
 
 @njit(cache=True)
-def collect_requests(req, nreq, root, out):
-    """Distinct root blocks still to build among the recorded requests ``req[j, :nreq[j]]``
-    (entries < 0 ignored), marked as requested (root -> -2). Returns their count; the blocks
-    in ``out``."""
+def collect_requests(req, nreq, bdims, ptab, pdims, pool, out):
+    """Root blocks still to build among the recorded requests ``req[j, :nreq[j]]``
+    (entries < 0 ignored), those with a page marked as requested (-1 -> -2 in the pool, so
+    listed once; blocks without a page may be listed more than once). Returns their count;
+    the blocks in ``out``."""
     r = 0
     for j in range(nreq.shape[0]):
         for u in range(nreq[j]):
             if req[j, u] < 0:
                 continue
             b = req[j, u]
-            if root[b] != -1:
-                continue
-            root[b] = -2
+            sl = _block_slot(b, bdims, ptab, pdims)
+            if sl >= 0:
+                if pool[sl] != -1:
+                    continue
+                pool[sl] = -2
             out[r] = b
             r += 1
     return r
@@ -735,8 +766,8 @@ def build_roots(blocks, bo, hb, bdims, lattice, tol, slack, leaf_size, max_depth
 
 
 @njit(cache=True)
-def integrate(blocks, noff, eoff, nchild, nstart, nlen, ent, counts, root, child, lstart,
-              llen, lists, used):
+def integrate(blocks, noff, eoff, nchild, nstart, nlen, ent, counts, bdims, ptab, pdims, pool,
+              child, lstart, llen, lists, used):
     """Append built trees (:func:`build_roots`; trees that did not fit their room are
     skipped) to the cache: nodes from ``used[0]``, list entries from ``used[1]`` (both
     advanced). The cache arrays must have room."""
@@ -756,7 +787,20 @@ def integrate(blocks, noff, eoff, nchild, nstart, nlen, ent, counts, root, child
             lists[e0 + u] = ent[eoff[t] + u]
         used[0] += nn
         used[1] += ne
-        root[blocks[t]] = n0
+        pool[_block_slot(blocks[t], bdims, ptab, pdims)] = n0
+
+
+@njit(cache=True)
+def shift_trees(child, lstart, llen, lists, n_cut, n_end, e_cut, e_end):
+    """Move the cache's nodes ``n_cut:n_end`` and list entries ``e_cut:e_end`` to the front
+    (in place, front to back), their child and list-start indices with them."""
+    for u in range(n_end - n_cut):
+        c = child[n_cut + u]
+        child[u] = c - n_cut if c >= 0 else -1
+        lstart[u] = lstart[n_cut + u] - e_cut
+        llen[u] = llen[n_cut + u]
+    for u in range(e_end - e_cut):
+        lists[u] = lists[e_cut + u]
 
 
 @njit(cache=True)

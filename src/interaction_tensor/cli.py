@@ -482,13 +482,18 @@ def _fixed_mmap_threshold() -> None:
     many 1-30 MB arrays of a detection then come from the heap and stay resident when freed
     (on a 2 M-point cloud at 1 % test points: 16-30 MB more peak per stage and about 40 MB
     more resident between stages). Keep it at 128 kB for the command line's one-shot
-    processes; elsewhere, or without glibc, nothing."""
+    processes. Also at most 2 malloc arenas: the Numba threads' small allocations otherwise
+    spread over per-thread arenas, and the same detection of a 2 M-point cloud peaked at
+    476-485 MB in two runs and 606-617 MB in two others (2026-11-24; with 2 arenas, 477 MB
+    in two runs). Elsewhere, or without glibc, nothing."""
     if not sys.platform.startswith("linux"):
         return
     try:
         import ctypes
 
-        ctypes.CDLL("libc.so.6").mallopt(-3, 128 * 1024)      # M_MMAP_THRESHOLD
+        libc = ctypes.CDLL("libc.so.6")
+        libc.mallopt(-3, 128 * 1024)      # M_MMAP_THRESHOLD
+        libc.mallopt(-8, 2)               # M_ARENA_MAX
     except (OSError, AttributeError):
         pass
 

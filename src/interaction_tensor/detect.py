@@ -24,9 +24,9 @@ from .settings import DetectSettings
 #: fraction of the scene's points is tested (see :func:`cache_pays`; benchmarks/RESULTS.md).
 CACHE_AUTO_FRACTION = 0.1
 #: Memory of the auto neighbour cache, per scene point (bytes; at most
-#: :data:`kernels.CACHE_BYTES`): past it the cache is emptied and rebuilt where needed. 24
-#: keeps a 2 M-point cloud at the defaults under 250 bytes a point (benchmarks/memory.py:
-#: 476 MB; 64 gave 616 MB).
+#: :data:`kernels.CACHE_BYTES`): past it the oldest trees are dropped and rebuilt where
+#: needed. 24 keeps a 2 M-point cloud at the defaults under 250 bytes a point
+#: (benchmarks/memory.py: 476 MB; 64 gave 616 MB).
 CACHE_AUTO_BYTES_PER_POINT = 24
 
 if TYPE_CHECKING:   # annotations only: descriptor imports this module to calibrate
@@ -313,13 +313,13 @@ def cache_pays(settings: DetectSettings, test_fraction: float) -> bool:
 
 
 def _score_all(scene, jobs, backend, index, settings, progress, label, use_cache=False,
-               cache_bytes=None):
+               cache_bytes=CACHE_BYTES):
     """Score every job's pairs in candidate batches; returns per job PairScores.
 
     Here a job's ``points`` are scene indices, gathered batch by batch to bound memory;
     ``index`` is the backend's search structure (Numba grid, TorchIndex, or None for cKDTree);
     ``use_cache``: the Numba backend's neighbour cache (see :func:`cache_pays`), of at most
-    ``cache_bytes`` bytes (None: :data:`kernels.CACHE_BYTES`).
+    ``cache_bytes`` bytes.
     """
     n_o = settings.n_orientations
     step = settings.batch_size * n_o
@@ -342,8 +342,7 @@ def _score_all(scene, jobs, backend, index, settings, progress, label, use_cache
             picks = [_pairs_of(z[start // n_o:(start + step) // n_o], n_o) for z in zorder]
             batch = [ScoreJob(scene.points[j.points[pk]], j.orient[pk], j.table, j.threshold,
                               j.vectors, j.rho, j.early_exit) for j, pk in zip(jobs, picks)]
-            for i, (s, a, d, c) in enumerate(score_jobs(batch, index, use_cache,
-                                                        cache_bytes or CACHE_BYTES)):
+            for i, (s, a, d, c) in enumerate(score_jobs(batch, index, use_cache, cache_bytes)):
                 totals[i][picks[i]], acc[i][picks[i]], at[i][picks[i]] = s, a, d
                 cmp_[i] += int(c.sum())
         else:

@@ -46,9 +46,19 @@ CACHE_SCAN_MAX = 256
 CACHE_OCC_CELLS = 4
 #: Separators of a box: candidates nearest to a (n + 1)^3 lattice over it.
 CACHE_LATTICE = 2
-#: Memory of one cache (bytes); past it the cache is emptied and rebuilt where needed.
+#: Memory of one cache (bytes); past it the oldest trees are dropped (or all of them) and
+#: rebuilt where needed.
 CACHE_BYTES = 512 * 2**20
-#: Most root blocks (4 bytes each); the block edge doubles until they fit.
+#: Root blocks' entries are kept in pages of PAGE^3 blocks (PAGE = 2^PAGE_BITS), allocated
+#: where a block is built: a person's keypoints reach far past the scene, and a dense table
+#: over that box took more of the cache's budget than its trees (26 of 48 MB, living-room4).
+PAGE_BITS = 2       # compiled into the Numba kernels: clear their cache after a change
+PAGE = 1 << PAGE_BITS
+#: Part of the budget kept for the page table and pages (1 / this; 1.2 MB of 48 on
+#: living-room4 with sitting-human).
+CACHE_TABLE_SHARE = 16
+#: Most root blocks (the page table holds one int32 per PAGE^3 of them); the block edge
+#: doubles until they fit.
 CACHE_MAX_BLOCKS = 16_000_000
 #: Pairs scored between two cache builds (the first round, then doubling up to the most).
 CACHE_FIRST_ROUND = 128
@@ -184,7 +194,7 @@ def _compile():
 
         _KERNELS = {name: getattr(nk, name) for name in (
             "score", "score_cached", "nearest_many", "collect_requests", "build_roots",
-            "integrate", "morton_order", "touched_roots")}
+            "integrate", "morton_order", "touched_roots", "shift_trees")}
     return _KERNELS
 
 
@@ -239,11 +249,15 @@ class NeighbourCache:
     ----------
     lo, hi : (3,) float64, the covered box (m): queries outside use the grid search
     bo : (3,) float64 corner of block (0, 0, 0) (m); hb : block edge (m); bdims : (3,) int64
-    root : (B,) int32 root node of each block (-1 not built, -2 requested)
+    ptab : int32 page of each group of PAGE^3 blocks (-1 none); pdims : (3,) groups per axis
+    pool : int32 pages of PAGE^3 entries: a block's root node (-1 not built, -2 requested,
+        -3 grid search); owner : group of each page (-1 free)
     child, llen : (M,) int32; lstart : (M,) int64; lists : (E,) int32 (see _numba_kernels)
     used : (2,) int64, nodes and list entries in use
     tol : squared-distance margin (m^2) for rounding; slack : gather radius margin (m)
-    resets : times the cache was emptied for memory
+    chunks : [(first node, first entry, blocks)] of each batch of trees, oldest first (trees
+        are appended, so a batch's nodes and entries run up to the next batch's)
+    evictions : times the oldest trees were dropped for memory; resets : times it was emptied
     """
 
     def __init__(self, grid: Grid, lo: np.ndarray, hi: np.ndarray, budget: int = CACHE_BYTES):
@@ -255,16 +269,22 @@ class NeighbourCache:
             hb *= 2.0
         self.lo, self.hi, self.bo, self.hb = lo, hi, lo.copy(), float(hb)
         self.bdims = (np.ceil((hi - lo) / hb).astype(np.int64) + 1).clip(1)
-        self.root = np.full(int(np.prod(self.bdims)), -1, np.int32)
-        self.child = np.full(1 << 16, -1, np.int32)
-        self.lstart = np.zeros(1 << 16, np.int64)
-        self.llen = np.zeros(1 << 16, np.int32)
-        self.lists = np.zeros(1 << 20, np.int32)
+        self.pdims = -(-self.bdims // PAGE)
+        self.ptab = np.full(int(np.prod(self.pdims)), -1, np.int32)
+        self.pool = np.full(0, -1, np.int32)
+        self.owner = np.full(0, -1, np.int64)
+        nodes = min(1 << 16, max(256, self.budget // 64))     # grown as needed
+        self.child = np.full(nodes, -1, np.int32)
+        self.lstart = np.zeros(nodes, np.int64)
+        self.llen = np.zeros(nodes, np.int32)
+        self.lists = np.zeros(min(1 << 20, max(1024, self.budget // 16)), np.int32)
         self.used = np.zeros(2, np.int64)
         self.occ = _block_occupancy(grid, CACHE_OCC_CELLS)
         m = float(max(np.abs(lo).max(), np.abs(hi).max(), 1.0))
         self.tol = 1e-13 * (1.0 + m) ** 2
         self.slack = float(np.sqrt(self.tol)) + 1e-9
+        self.chunks = []
+        self.evictions = 0
         self.resets = 0
 
     def covers(self, lo, hi) -> bool:
@@ -272,19 +292,104 @@ class NeighbourCache:
         return bool(np.all(lo >= self.lo) and np.all(hi <= self.hi))
 
     @property
+    def table_bytes(self) -> int:
+        """Bytes of the root blocks' page table and pages."""
+        return int(self.ptab.nbytes + self.pool.nbytes + self.owner.nbytes)
+
+    @property
     def nbytes(self) -> int:
-        return int(self.root.nbytes + self.child.nbytes + self.lstart.nbytes +
+        return int(self.table_bytes + self.child.nbytes + self.lstart.nbytes +
                    self.llen.nbytes + self.lists.nbytes)
 
     def state(self) -> tuple:
         """The arrays :func:`_numba_kernels.score_cached` reads, in its order."""
-        return (self.root, self.bo, self.hb, self.bdims, self.child, self.lstart, self.llen,
-                self.lists, CACHE_SCAN_MAX)
+        return (self.ptab, self.pdims, self.pool, self.bo, self.hb, self.bdims, self.child,
+                self.lstart, self.llen, self.lists, CACHE_SCAN_MAX)
+
+    def _coords(self, blocks: np.ndarray):
+        d1, d2 = int(self.bdims[1]), int(self.bdims[2])
+        return blocks // (d1 * d2), (blocks // d2) % d1, blocks % d2
+
+    def _groups(self, blocks: np.ndarray) -> np.ndarray:
+        """The page-table entry (group of PAGE^3 blocks) of each root block."""
+        bi, bj, bk = self._coords(blocks)
+        sh = PAGE_BITS
+        return ((bi >> sh) * int(self.pdims[1]) + (bj >> sh)) * int(self.pdims[2]) + (bk >> sh)
+
+    def _slots(self, blocks: np.ndarray) -> np.ndarray:
+        """Where each root block's entry lies in the pool (their pages allocated)."""
+        bi, bj, bk = self._coords(blocks)
+        m = PAGE - 1
+        page = self.ptab[self._groups(blocks)].astype(np.int64)
+        return ((page * PAGE + (bi & m)) * PAGE + (bj & m)) * PAGE + (bk & m)
+
+    def _allocate(self, blocks: np.ndarray) -> np.ndarray:
+        """Pages for these root blocks where they have none: free pages first, then the pool
+        grows, within 1 / :data:`CACHE_TABLE_SHARE` of the budget (past it, the oldest
+        trees are dropped to free theirs). Returns which blocks have a page (those without
+        stay unbuilt: the grid search answers there)."""
+        g = self._groups(blocks)
+        new = np.unique(g[self.ptab[g] < 0])
+        if len(new):
+            size = PAGE ** 3 * 4 + 8
+            cap = max(0, (self.budget // CACHE_TABLE_SHARE - self.ptab.nbytes) // size)
+            if int((self.owner >= 0).sum()) + len(new) > cap:
+                if not self._evict(0, 0):
+                    self._reset()
+            free = np.flatnonzero(self.owner < 0)
+            if len(free) < len(new) and len(self.owner) < cap:
+                have = len(self.owner)
+                grow = min(cap, max(2 * have, have + len(new) - len(free))) - have
+                self.owner = np.concatenate([self.owner, np.full(grow, -1, np.int64)])
+                self.pool = np.concatenate([self.pool, np.full(grow * PAGE ** 3, -1, np.int32)])
+                free = np.flatnonzero(self.owner < 0)
+            take = free[:len(new)]
+            self.owner[take] = new[:len(take)]
+            self.ptab[new[:len(take)]] = take
+        return self.ptab[g] >= 0
+
+    def _free_pages(self):
+        """Give back the pages none of whose blocks is built, requested or marked."""
+        held = np.flatnonzero(self.owner >= 0)
+        empty = held[(self.pool.reshape(-1, PAGE ** 3)[held] == -1).all(axis=1)]
+        self.ptab[self.owner[empty]] = -1
+        self.owner[empty] = -1
 
     def _reset(self):
-        self.root[self.root >= 0] = -1
+        self.pool[self.pool >= 0] = -1
+        self._free_pages()
         self.used[:] = 0
+        self.chunks = []
         self.resets += 1
+
+    def _evict(self, nodes: int, entries: int) -> bool:
+        """Drop the oldest batches of trees (first built, first dropped: the Z-ordered search
+        has mostly moved on from them) until the rest and ``nodes`` / ``entries`` more fill
+        at most half the room the budget leaves beside the root table, and move the rest to
+        the front. False when nothing would be kept (the caller empties the cache)."""
+        room = (self.budget - self.table_bytes) // 2 - (16 * nodes + 4 * entries)
+        n_end, e_end = int(self.used[0]), int(self.used[1])
+        keep = len(self.chunks)
+        while keep > 0:
+            n0, e0, _ = self.chunks[keep - 1]
+            if 16 * (n_end - n0) + 4 * (e_end - e0) > room:
+                break
+            keep -= 1
+        if keep in (0, len(self.chunks)):
+            return False
+        n_cut, e_cut = self.chunks[keep][0], self.chunks[keep][1]
+        for _, _, blocks in self.chunks[:keep]:
+            self.pool[self._slots(blocks)] = -1
+        kept = self.chunks[keep:]
+        for _, _, blocks in kept:
+            self.pool[self._slots(blocks)] -= n_cut
+        self._free_pages()
+        _compile()["shift_trees"](self.child, self.lstart, self.llen, self.lists, n_cut,
+                                  n_end, e_cut, e_end)
+        self.chunks = [(n0 - n_cut, e0 - e_cut, b) for n0, e0, b in kept]
+        self.used[:] = (n_end - n_cut, e_end - e_cut)
+        self.evictions += 1
+        return True
 
     def _reserve(self, nodes: int, entries: int) -> bool:
         """Room for ``nodes`` more nodes and ``entries`` more list entries: False when that
@@ -294,12 +399,14 @@ class NeighbourCache:
         cap_n, cap_e = len(self.child), len(self.lists)
         if need_n <= cap_n and need_e <= cap_e:
             return True
-        if self.root.nbytes + need_n * 16 + need_e * 4 > self.budget:
+        table = max(self.table_bytes, self.budget // CACHE_TABLE_SHARE)   # pages' share
+        least_n, least_e = max(cap_n, need_n), max(cap_e, need_e)
+        if table + least_n * 16 + least_e * 4 > self.budget:
             return False
         new_n = cap_n if need_n <= cap_n else max(need_n, 2 * cap_n)
         new_e = cap_e if need_e <= cap_e else max(need_e, 2 * cap_e)
-        if self.root.nbytes + new_n * 16 + new_e * 4 > self.budget:
-            new_n, new_e = max(cap_n, need_n), max(cap_e, need_e)
+        if table + new_n * 16 + new_e * 4 > self.budget:
+            new_n, new_e = least_n, least_e
         n0, e0 = int(self.used[0]), int(self.used[1])
         if new_n > cap_n:
             for name, fill in (("child", -1), ("lstart", 0), ("llen", 0)):
@@ -317,8 +424,8 @@ class NeighbourCache:
         """Build the root blocks that keypoints ``0..n_keys - 1`` of pairs ``perm`` land in."""
         k = _compile()
         touched = np.empty((len(perm), n_keys), np.int64)
-        k["touched_roots"](perm, tp, orient, offsets, n_keys, self.root, self.bo, self.hb,
-                           self.bdims, touched)
+        k["touched_roots"](perm, tp, orient, offsets, n_keys, self.ptab, self.pdims, self.pool,
+                           self.bo, self.hb, self.bdims, touched)
         self.update(grid, touched, np.full(len(perm), n_keys, np.int64))
 
     def update(self, grid: Grid, req: np.ndarray, nreq: np.ndarray):
@@ -330,7 +437,11 @@ class NeighbourCache:
             return
         k = _compile()
         blocks = np.empty(total, np.int64)
-        blocks = blocks[:k["collect_requests"](req, nreq, self.root, blocks)]
+        blocks = blocks[:k["collect_requests"](req, nreq, self.bdims, self.ptab, self.pdims,
+                                               self.pool, blocks)]
+        blocks = np.unique(blocks)
+        blocks = blocks[self._allocate(blocks)]
+        self.pool[self._slots(blocks)] = -2
         for start in range(0, len(blocks), CACHE_BUILD_BATCH):
             self._build(grid, blocks[start:start + CACHE_BUILD_BATCH])
 
@@ -357,12 +468,16 @@ class NeighbourCache:
         fits = (counts[:, 0] <= room[:, 0]) & (counts[:, 1] <= room[:, 1])
         nodes, entries = int(counts[fits, 0].sum()), int(counts[fits, 1].sum())
         if not self._reserve(nodes, entries):
-            self._reset()
-            if not self._reserve(nodes, entries):
-                self.root[blocks[fits]] = -3     # too big for the budget: grid search
-                fits[:] = False
+            if not (self._evict(nodes, entries) and self._reserve(nodes, entries)):
+                self._reset()
+                if not self._reserve(nodes, entries):
+                    self.pool[self._slots(blocks[fits])] = -3   # too big: grid search
+                    fits[:] = False
+        if fits.any():
+            self.chunks.append((int(self.used[0]), int(self.used[1]), blocks[fits]))
         k["integrate"](blocks, noff, eoff, nchild, nstart, nlen, ent,
-                       np.where(fits[:, None], counts, np.iinfo(np.int64).max), self.root,
+                       np.where(fits[:, None], counts, np.iinfo(np.int64).max), self.bdims,
+                       self.ptab, self.pdims, self.pool,
                        self.child, self.lstart, self.llen, self.lists, self.used)
         again = np.flatnonzero(~fits & (counts[:, 0] > 0))
         again = again[(counts[again, 0] > room[again, 0]) | (counts[again, 1] > room[again, 1])]
@@ -385,23 +500,21 @@ def _block_occupancy(grid: Grid, cb: int) -> np.ndarray:
 def _cache_for(grid: Grid, points: np.ndarray, offsets: np.ndarray,
                budget: int = CACHE_BYTES) -> NeighbourCache:
     """The grid's cache, (re)made to cover the scene and every query of these pairs, held to
-    ``budget`` bytes (emptied if it holds more)."""
+    ``budget`` bytes (made anew if it holds more)."""
     reach = np.abs(offsets).reshape(-1, 3).max(axis=0) + grid.cell
     scene_lo = grid.origin
     scene_hi = grid.origin + grid.dims * grid.cell
     lo = np.minimum(scene_lo, points.min(axis=0)) - reach
     hi = np.maximum(scene_hi, points.max(axis=0)) + reach
     cache = grid.cache
-    if cache is None or not cache.covers(lo, hi):
+    if cache is None or not cache.covers(lo, hi) or cache.nbytes > budget:
         if cache is not None:
             lo, hi = np.minimum(lo, cache.lo), np.maximum(hi, cache.hi)
         grid.cache = cache = NeighbourCache(grid, lo, hi, budget)
     elif cache.budget != budget:
         cache.budget = int(budget)
-        if cache.nbytes > budget:
-            cache.child, cache.lstart, cache.llen, cache.lists = (
-                a[:1 << 10].copy() for a in (cache.child, cache.lstart, cache.llen, cache.lists))
-            cache._reset()
+        cache.pool[cache.pool == -3] = -1          # too big for the old budget: try again
+        cache._free_pages()
     return cache
 
 
@@ -412,8 +525,8 @@ def score_jobs(jobs: list, grid: Grid, cache: bool | None = None,
     Every nearest neighbour is exact: the results are identical to
     :func:`interaction_tensor.scoring.score_pairs`, and bit for bit the same with or
     without the neighbour cache (``cache``; None: :data:`NEIGHBOUR_CACHE`; at most
-    ``cache_bytes`` bytes, emptied and rebuilt where needed past it). Returns, per
-    job, (score, accepted, decided_at, comparisons) arrays over its pairs.
+    ``cache_bytes`` bytes: past it the oldest trees are dropped, rebuilt where needed).
+    Returns, per job, (score, accepted, decided_at, comparisons) arrays over its pairs.
     """
     use_cache = NEIGHBOUR_CACHE if cache is None else bool(cache)
     import numba
