@@ -31,7 +31,7 @@ PARALLEL_CHUNK = 64
 #: (benchmarks/kernel_speed.py: 0.9x on 3,000 random kitchen5 candidates, 0.4x on
 #: living-room4; 1.8x and 5.9x once built); :func:`detect.cache_pays` turns it on where test
 #: points are dense (benchmarks/run.py: 1.78x on kitchen5 at 30 %, 2.65x on living-room4;
-#: sitting on living-room4, a dense patch from an empty cache: 4.6x).
+#: sitting on the whole of living-room4 at the defaults: 4.47x).
 NEIGHBOUR_CACHE = False
 #: Neighbour cache (see :class:`NeighbourCache`). Root block edge, in grid cells (a grid cell
 #: is 3 spacings, so 4 spacings).
@@ -393,7 +393,7 @@ class NeighbourCache:
 
     def _reserve(self, nodes: int, entries: int) -> bool:
         """Room for ``nodes`` more nodes and ``entries`` more list entries: False when that
-        would pass its ``budget`` (bytes; the caller empties the cache)."""
+        would pass its ``budget`` (bytes; the caller drops the oldest trees, then all)."""
         need_n = int(self.used[0]) + nodes
         need_e = int(self.used[1]) + entries
         cap_n, cap_e = len(self.child), len(self.lists)
