@@ -447,6 +447,19 @@ NOTES = """## Where the time goes, and what was tried
   query); seeding the search from a distance transform of the cell occupancy; comparing
   cosines instead of angles; handing pairs to threads in chunks of 64 (accepted pairs cost
   512 comparisons, rejected ones ~120).
+- Where a detection through the neighbour cache spends its time (kitchen5, placing, 30 %,
+  the defaults but one Numba thread, phases timed by a scratch profile, 2026-11-25, beside an
+  evaluation, so the seconds are slow): 99.2 s of scoring, of it 76 % in the scoring kernel
+  (470 M comparisons), 15 % building trees (1,254 builds), 6 % finding the root blocks the
+  next round will reach (`touched_roots`) and 1.4 % collecting requests. Kept: those blocks
+  found from every 4th pair of a round (`CACHE_PREPARE_STRIDE`: neighbours in Z-order reach
+  nearly the same blocks, the rest are built after the round that asked for them): 94.7 s,
+  the kernel's time unchanged. Tried and dropped in the same conditions: leaves of 1 cm
+  (122 s), of 1 cm split past 8 samples (257 s) and of 2 cm split past 8 (270 s): more to
+  build and to descend than the shorter lists save. 4 kB pages under every array cost 5 %
+  (102.0 s against 96.9 s with NumPy's huge pages); the command line now keeps NumPy's
+  arrays on 4 kB pages (memory: see below) and puts only the scene's points and normals on
+  huge pages: 94.4 s against 91.9-95.9 s.
 - Tried and dropped (measured on kitchen5, this machine, 2026-11-21): finer grid cells
   (1.5 and 2 spacings: slower); a second level of 4x4x4 super-cells for far queries (no
   gain); sorting test points along a Morton curve (no change beyond noise); exact per-cell

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import csv
+import json
+from pathlib import Path
 
 import numpy as np
 
@@ -94,6 +96,21 @@ def test_evaluate_merge_equals_one_run(tmp_path, capsys):
     assert sorted(p.name for p in (out / "pictures").glob("*.png")) == sorted(
         p.name for p in (tmp_path / "ab" / "pictures").glob("*.png"))
 
+    # a merge is itself a part: (a + b) + c gives what a + b + c gives, its parts listed
+    s3 = shared_file("scenes/office-desk2.ply")
+    assert main(["evaluate", "--scenes", str(s3), "-o", str(tmp_path / "c3"), *common]) == 0
+    parts = [str(tmp_path / n) for n in ("a", "b", "c3")]
+    assert main(["evaluate-merge", *parts, "-o", str(tmp_path / "abc"), "--quiet"]) == 0
+    assert main(["evaluate-merge", str(out), parts[2], "-o", str(tmp_path / "ab_c"),
+                 "--quiet"]) == 0
+    for name in ("table1.csv", "runs.csv", "judgements.csv", "scenes_accepting.csv"):
+        assert ((tmp_path / "ab_c" / name).read_text() ==
+                (tmp_path / "abc" / name).read_text()), name
+    info = json.loads((tmp_path / "ab_c" / "run.json").read_text())["settings"]
+    assert info["merged_from"] == parts
+    assert [Path(s).stem for s in info["scenes"]] == ["office-desk1", "office-desk5",
+                                                      "office-desk2"]
+
     # the pictures drawn again from the recorded poses: the same pictures
     from PIL import Image
 
@@ -123,6 +140,15 @@ def test_evaluate_merge_equals_one_run(tmp_path, capsys):
     assert len(err) == 3 and all(e.startswith("itensor: error:") for e in err), err
     assert "office-desk1" in err[0] and "seed" in err[1] and "16" in err[2]
     assert (out / "table1.csv").read_text() == before
+
+    # settings named as allowed to differ merge, each part's value recorded
+    assert main(["evaluate-merge", str(tmp_path / "a"), str(tmp_path / "c"), "-o",
+                 str(tmp_path / "ac"), "--allow-differing", "seed,pictures", "--quiet"]) == 0
+    info = json.loads((tmp_path / "ac" / "run.json").read_text())["settings"]
+    assert [r["value"] for r in info["per_part"]["seed"]] == [0, 1]
+    assert [r["scenes"] for r in info["per_part"]["seed"]] == [["office-desk1.ply"],
+                                                               ["office-desk5.ply"]]
+    assert info["seed"] == "differs per part (see per_part)"
 
 
 def test_atomic_dir_keeps_the_earlier_result_on_failure(tmp_path):

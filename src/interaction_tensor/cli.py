@@ -477,15 +477,23 @@ def _on_sigterm(signum, frame):
     raise Terminated()
 
 
-def _fixed_mmap_threshold() -> None:
-    """glibc raises its mmap threshold to 32 MB after the first large array is freed, so the
-    many 1-30 MB arrays of a detection then come from the heap and stay resident when freed
-    (on a 2 M-point cloud at 1 % test points: 16-30 MB more peak per stage and about 40 MB
-    more resident between stages). Keep it at 128 kB for the command line's one-shot
-    processes. Also at most 2 malloc arenas: the Numba threads' small allocations otherwise
-    spread over per-thread arenas, and the same detection of a 2 M-point cloud peaked at
-    476-485 MB in two runs and 606-617 MB in two others (2026-11-24; with 2 arenas, 477 MB
-    in two runs). Elsewhere, or without glibc, nothing."""
+def _one_shot_memory() -> None:
+    """Memory settings for the command line's one-shot processes (Linux, glibc):
+
+    - glibc raises its mmap threshold to 32 MB after the first large array is freed, so the
+      many 1-30 MB arrays of a detection then come from the heap and stay resident when
+      freed (on a 2 M-point cloud at 1 % test points: 16-30 MB more peak per stage and
+      about 40 MB more resident between stages): kept at 128 kB.
+    - At most 2 malloc arenas: the Numba threads' small allocations otherwise spread over
+      per-thread arenas.
+    - No transparent huge pages under NumPy's arrays (NumPy asks for them under every
+      array of 4 MB or more; Linux backs a touched 2 MB range whole, and collapses ranges
+      in the background): with them the same detection of a 2 M-point cloud peaked at
+      488-490 MB in four runs and 622 MB in a fifth (2026-11-25), without them at 475 MB
+      in every run. The scene's points and normals, read at random by every query, still
+      get them (:func:`scene.hot_copy`).
+
+    Elsewhere, nothing."""
     if not sys.platform.startswith("linux"):
         return
     try:
@@ -496,13 +504,19 @@ def _fixed_mmap_threshold() -> None:
         libc.mallopt(-8, 2)               # M_ARENA_MAX
     except (OSError, AttributeError):
         pass
+    import numpy as np
+
+    try:
+        np._core.multiarray._set_madvise_hugepage(False)
+    except AttributeError:          # not NumPy 2's private switch: its default stays
+        pass
 
 
 def main(argv=None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if argv is None:                    # the itensor process itself, not a caller's
-        _fixed_mmap_threshold()
+        _one_shot_memory()
     try:
         previous = signal.signal(signal.SIGTERM, _on_sigterm)
     except ValueError:          # not the main thread: leave the handler alone

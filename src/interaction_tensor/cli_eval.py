@@ -125,7 +125,7 @@ def cmd_evaluate_merge(args) -> int:
     from .evaluation.report import judge_markdown, table_markdown
 
     log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
-    res = merge(args.runs, args.output, log)
+    res = merge(args.runs, args.output, log, allow=args.allow_differing)
     if not args.quiet:
         print(table_markdown(res.table, tuple(res.settings.get("methods") or ())))
         if res.judge_accuracy:
@@ -192,5 +192,10 @@ def register(sub) -> None:
                        help="merge `itensor evaluate` runs made on disjoint scene subsets")
     p.add_argument("runs", nargs="+", help="output directories of the runs (same settings)")
     p.add_argument("-o", "--output", required=True, help="output directory")
+    p.add_argument("--allow-differing", default=(), metavar="KEY[,KEY...]",
+                   type=lambda t: tuple(k.strip() for k in t.split(",") if k.strip()),
+                   help="settings of run.json the runs may hold differently (e.g. icp_backend); "
+                        "the merged run.json lists each run's value under per_part "
+                        "(default: none, all settings must agree)")
     quiet_option(p)
     p.set_defaults(func=cmd_evaluate_merge)

@@ -2,7 +2,7 @@
 
 ``itensor evaluate`` on a long list of scenes can be split across processes or machines (one
 ``--scenes`` subset each, same settings and seed); ``itensor evaluate-merge A B ... -o OUT``
-then reads each run's per-judgement records (``judgements.csv``, ``runs.csv``,
+then reads each run's (or earlier merge's) per-judgement records (``judgements.csv``, ``runs.csv``,
 ``timings.csv``, ``judge_accuracy.csv``, ``run.json``) and writes the same files a single run
 would have written, pictures included. The merge refuses runs whose settings differ or whose
 scenes overlap, and builds its output in a temporary directory that replaces ``OUT`` only when
@@ -21,8 +21,8 @@ import numpy as np
 from ..errors import InputError
 
 #: settings that may differ between the parts of one evaluation (the judge's labelled-set
-#: check need run in one part only)
-_PER_PART = {"scenes", "total_seconds", "judge_check"}
+#: check need run in one part only; a part may itself be a merge)
+_PER_PART = {"scenes", "total_seconds", "judge_check", "merged_from"}
 
 _INT = {"rank", "candidates", "pairs", "accepted", "valid_n", "valid_right", "invalid_n",
         "invalid_right"}
@@ -114,8 +114,12 @@ def load_run(directory) -> "EvalResult":
                       timings=timings, settings=settings)
 
 
-def merge(directories, out_dir, log=print) -> "EvalResult":
-    """Merge the runs in ``directories`` (disjoint scenes, equal settings) into ``out_dir``."""
+def merge(directories, out_dir, log=print, allow=()) -> "EvalResult":
+    """Merge the runs in ``directories`` (disjoint scenes, equal settings) into ``out_dir``.
+
+    ``allow``: settings the parts may hold differently (e.g. ``icp_backend`` when one part
+    ran where Open3D could not load); the merged ``run.json`` then lists each part's value
+    of them under ``per_part``, so that no table hides the difference."""
     from .report import write_all
     from .runner import METHODS, EvalResult, metrics
 
@@ -123,10 +127,11 @@ def merge(directories, out_dir, log=print) -> "EvalResult":
     if len(dirs) < 2:
         raise InputError(None, "give at least two evaluation directories to merge")
     parts = [load_run(d) for d in dirs]
-    base = {k: v for k, v in parts[0].settings.items() if k not in _PER_PART}
+    skip = _PER_PART | {"per_part"} | set(allow)
+    base = {k: v for k, v in parts[0].settings.items() if k not in skip}
     seen: dict[str, Path] = {}
     for d, p in zip(dirs, parts):
-        own = {k: v for k, v in p.settings.items() if k not in _PER_PART}
+        own = {k: v for k, v in p.settings.items() if k not in skip}
         diff = sorted(k for k in set(base) | set(own) if base.get(k) != own.get(k))
         if diff:
             raise InputError(d, f"settings differ from {dirs[0]}: {', '.join(diff)}")
@@ -139,7 +144,23 @@ def merge(directories, out_dir, log=print) -> "EvalResult":
                                # the parts ran side by side: the longest is the wall time
                                "total_seconds": max(p.settings.get("total_seconds") or 0
                                                     for p in parts),
-                               "merged_from": [str(d) for d in dirs]})
+                               # a part that is itself a merge lists its own parts
+                               "merged_from": [m for d, p in zip(dirs, parts)
+                                               for m in (p.settings.get("merged_from")
+                                                         or [str(d)])]})
+    per_part = {}
+    for key in allow:
+        rows = []
+        for d, p in zip(dirs, parts):
+            earlier = (p.settings.get("per_part") or {}).get(key)
+            rows += earlier if earlier else [{"part": str(d), "scenes": p.settings["scenes"],
+                                              "value": p.settings.get(key)}]
+        if len({json.dumps(r["value"]) for r in rows}) > 1:
+            per_part[key] = rows
+    if per_part:
+        res.settings["per_part"] = per_part
+        for key in per_part:
+            res.settings[key] = "differs per part (see per_part)"
     for p in parts:
         res.judgements += p.judgements
         res.runs += p.runs
