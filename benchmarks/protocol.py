@@ -8,7 +8,7 @@ The 8 examples are trained as ``itensor evaluate`` trains them (real query objec
 one ``detect_many`` pass over the 8 descriptors at the defaults (shared test points, the
 neighbour cache at 30 %). No judging, no baselines, no pictures: this is the detection part of
 the protocol, the part iT's speed decides. Prints a Markdown table (seconds per scene,
-candidates and pairs scored, candidates/s) and writes ``benchmarks/protocol.json``.
+candidates scored, candidates/s; pairs in the JSON) and writes ``benchmarks/protocol.json``.
 """
 
 from __future__ import annotations

@@ -504,6 +504,11 @@ def _one_shot_memory() -> None:
         libc.mallopt(-8, 2)               # M_ARENA_MAX
     except (OSError, AttributeError):
         pass
+    _numpy_small_pages()
+
+
+def _numpy_small_pages() -> None:
+    """NumPy's arrays on 4 kB pages (see :func:`_one_shot_memory`)."""
     import numpy as np
 
     try:
