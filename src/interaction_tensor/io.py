@@ -345,15 +345,18 @@ def atomic_dir(path, marker: str, allowed=None):
     with _directory_lock(path):
         _remove_stale(path)
         # SIGINT/SIGTERM wait while the temporary directory is made, swapped in or removed:
-        # arriving in between they left it behind, or the old result moved aside
-        with _signals_deferred():
-            try:
-                tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".part",
-                                            dir=path.parent))
-            except OSError as exc:
-                raise InputError(path, f"cannot write: {exc.strerror}") from None
-            os.chmod(tmp, 0o777 & ~_umask())
+        # arriving in between they left it behind, or the old result moved aside. A signal
+        # held while it is made is raised as that block ends, inside the try, so that the
+        # finally below removes it
+        tmp = None
         try:
+            with _signals_deferred():
+                try:
+                    tmp = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".part",
+                                                dir=path.parent))
+                except OSError as exc:
+                    raise InputError(path, f"cannot write: {exc.strerror}") from None
+                os.chmod(tmp, 0o777 & ~_umask())
             yield tmp
             with _signals_deferred():
                 _check_replaceable(path, marker, allowed)   # nothing new appeared meanwhile
@@ -367,7 +370,7 @@ def atomic_dir(path, marker: str, allowed=None):
                     shutil.rmtree(old, ignore_errors=True)
         finally:
             with _signals_deferred():
-                if tmp.exists():
+                if tmp is not None and tmp.exists():
                     shutil.rmtree(tmp, ignore_errors=True)
 
 
