@@ -133,16 +133,19 @@ class DetectSettings:
     keypoints: str = "weighted"
     #: Stop comparing a candidate as soon as its decision is known (paper, section 4.2.1).
     early_exit: bool = True
-    #: Order in which keypoints are compared. ``weight``: largest weight first (paper).
-    #: ``adaptive``: those that fail most often first, measured on a seeded pilot of this
-    #: scene's own candidates, so that rejections come sooner (8 % less time on kitchen5,
-    #: 4 % more on living-room4). Scores are sums over keypoints, so the order never changes a
-    #: decision or an accepted score. It does change what depends on where the early exit
-    #: stopped: a rejected pair's partial score and every pair's ``decided_at``. ``itensor
-    #: evaluate`` ranks pairs by those partial scores (the best rejected pairs when fewer
-    #: than 5 are accepted, and the bottom 5) and its sampling experiment reads
-    #: ``decided_at``; with ``adaptive`` its judged accuracy fell from 67.4 % to 59.9 %
-    #: (sitting 80.0 -> 52.9).
+    #: Order in which keypoints are compared. ``weight`` (default): largest weight first (the
+    #: paper's, and the authors' code's). ``adaptive``: those that fail most often first,
+    #: measured on a seeded pilot of this scene's own candidates, so that rejections come
+    #: sooner. Scores are sums over keypoints, so the order never changes a decision, an
+    #: accepted score (bit for bit with the paper's criterion, to rounding with the gaussian
+    #: one), the heat map or the predictions (tested). It does change what depends on where
+    #: the early exit stopped: a rejected pair's partial score and every pair's ``decided_at``
+    #: (``comparisons_to_decision`` in predictions.json). Measured at 30 % with the neighbour
+    #: cache (2026-11-25): 1.50x the candidates/s of the weight order for placing-bowl on
+    #: kitchen5, 1.20x on living-room4, but 0.71x for sitting-human on living-room4 (probably
+    #: because the person's keypoints that fail most often lie far from any surface, where a
+    #: lookup costs most), so it is not the default. ``itensor evaluate`` asks for
+    #: ``weight`` itself.
     keypoint_order: str = "weight"
     #: Pairs fully scored to measure the adaptive order.
     pilot_pairs: int = 256
