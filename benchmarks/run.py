@@ -453,10 +453,10 @@ NOTES = """## Where the time goes, and what was tried
   where a lookup costs most (not yet measured keypoint by keypoint); its mean comparisons to
   the decision rose from 281 to 429, since acceptances, which still score every keypoint,
   come later in that order. The 8 descriptors of the protocol on kitchen5 took 1.46x longer
-  (below). It was the default for a day once,
-  and withdrawn because `itensor evaluate` then ranked rejected pairs by another order's
-  partial scores (judged accuracy 67.4 % -> 59.9 %); the evaluation now ranks them by full
-  score and asks for the paper's order itself. Weighting the order by a lookup cost
+  (below). It was the default for a day once, and withdrawn because `itensor evaluate` then
+  ranked rejected pairs by another order's partial scores (judged accuracy 67.4 % ->
+  59.9 %); the evaluation now ranks them by full score and asks for the paper's order
+  itself. Weighting the order by a lookup cost
   (failure rate / (1 + d / s), d the pilot's mean distance to the surface) was tried for
   placing only and was no faster (kitchen5, 10 % test points, 1 thread, beside other work:
   17-19 s for s = 2 cm against 13-15 s unweighted; s = 5-10 cm within the noise); a cost
@@ -563,10 +563,9 @@ def markdown(results: dict) -> str:
               "(faster for this bowl, slower for a person: see the notes below). Both decide "
               "exactly alike and give the same accepted scores and top 5; only the partial "
               "scores kept by rejected pairs differ (README). Both answer nearest neighbours "
-              "from the neighbour "
-              "cache, the default at 30 % test points; `grid` is the weight order through the "
-              "grid search alone (the default path before 2026-11-24, here with the same "
-              "Z-ordered batches), in the same run.", "",
+              "from the neighbour cache, the default at 30 % test points; `grid` is the weight "
+              "order through the grid search alone (the default path before 2026-11-24, here "
+              "with the same Z-ordered batches), in the same run.", "",
               "Rates count the work done: a candidate is a test point that passed the normal "
               "filter, scored in all 8 orientations; a pair is one (candidate, orientation). "
               "Sampled test points are a count, not a rate.", "",
@@ -585,9 +584,9 @@ def markdown(results: dict) -> str:
                          f"{o['mean_comparisons_per_decision']:.0f} | {d['peak_rss_mb']:.0f} |")
     lines += ["", "Adaptive order against the default (the paper's weight order), same run: " + "; ".join(
         f"{d['scene']}: **{d['orders_agree']['speedup']:.2f}x** the candidates/s "
-        f"({d['orders_agree'].get('speedup_vs_grid', float('nan')):.2f}x the grid search's), "
+        f"({d['orders_agree']['speedup_vs_grid']:.2f}x the grid search's), "
         f"{100 * d['orders_agree']['decisions']:.2f} % identical decisions, accepted scores "
-        f"within {d['orders_agree'].get('max_accepted_score_difference', float('nan')):.1e}, "
+        f"within {d['orders_agree']['max_accepted_score_difference']:.1e}, "
         f"identical top 5: {d['orders_agree']['top5']}" for d in results["detect"]) + "."]
     if all("grid_agrees" in d for d in results["detect"]):
         lines += ["", "Neighbour cache (default) against the grid search alone, both in weight "

@@ -66,8 +66,8 @@ def detection_options(p) -> None:
     p.add_argument("--keypoint-order", choices=("weight", "adaptive"), default="weight",
                    help="compare keypoints in weight order (the paper's, default) or those that "
                         "fail most often on a seeded pilot first (adaptive: the same decisions, "
-                        "accepted scores and predictions; faster for objects, slower for "
-                        "persons; rejected pairs keep another partial score)")
+                        "accepted scores and predictions; faster or slower by example and "
+                        "scene; rejected pairs keep another partial score)")
 
 
 # --------------------------------------------------------------------------- real scenes

@@ -142,10 +142,10 @@ class DetectSettings:
     #: the early exit stopped: a rejected pair's partial score and every pair's ``decided_at``
     #: (``comparisons_to_decision`` in predictions.json). Measured at 30 % with the neighbour
     #: cache (2026-11-25): 1.50x the candidates/s of the weight order for placing-bowl on
-    #: kitchen5, 1.20x on living-room4, but 0.71x for sitting-human on living-room4 (probably
-    #: because the person's keypoints that fail most often lie far from any surface, where a
-    #: lookup costs most), so it is not the default. ``itensor evaluate`` asks for
-    #: ``weight`` itself.
+    #: kitchen5, 1.20x on living-room4, but 0.71x for sitting-human on living-room4 and
+    #: 0.68x for placing-bowl on office-desk1 (one noisy run). The person probably loses
+    #: because its keypoints that fail most often lie far from any surface, where a lookup
+    #: costs most. So it is not the default; ``itensor evaluate`` asks for ``weight`` itself.
     keypoint_order: str = "weight"
     #: Pairs fully scored to measure the adaptive order.
     pilot_pairs: int = 256
