@@ -133,7 +133,7 @@ def test_train_takes_objects_too(files, tensor):
     sitting = it.train(q, files / "table.ply", "x", spacing=SPACING, acceptance="sitting")
     from interaction_tensor.examples.interactions import acceptance
 
-    assert sitting.threshold() == pytest.approx(acceptance("sitting")[0])
+    assert sitting.threshold() == pytest.approx(acceptance("sitting")["threshold"])
 
 
 def test_python_and_cli_give_the_same_result(files, tensor, tmp_path):

@@ -59,13 +59,19 @@ def test_detection_rejects_accepted_pairs_that_violate_clearance():
     q, s = corner_example()
     t = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1))
     scene = it.prepare_scene(s, 0.01, seed=2)
-    loose = it.detect(scene, t, it.DetectSettings(sample_fraction=0.5, clearance=False))
+    loose = it.detect(scene, t, it.DetectSettings(sample_fraction=0.5, clearance=False,
+                                                  contact=False, interior=False))
     strict = it.detect(scene, t, it.DetectSettings(sample_fraction=0.5))
     assert np.array_equal(loose.pairs.accepted, strict.score_accepted)
-    assert strict.pairs.accepted.sum() <= loose.pairs.accepted.sum()
+    assert strict.pairs.accepted.sum() < loose.pairs.accepted.sum()
     assert (strict.clearance_violations[~strict.score_accepted] == -1).all()
+    assert (strict.placement[~strict.score_accepted] == -1).all()
+    assert np.array_equal(strict.placement == 0, strict.pairs.accepted)
     st = strict.stats
-    assert st["pairs_accepted_by_score"] - st["pairs_failing_clearance"] == st["pairs_accepted"]
+    assert st["pairs_failing_clearance"] + st["pairs_failing_contact"] + \
+        st["pairs_failing_interior"] > 0
+    assert st["pairs_accepted_by_score"] - st["pairs_failing_clearance"] - \
+        st["pairs_failing_contact"] - st["pairs_failing_interior"] == st["pairs_accepted"]
 
 
 def test_rank_pairs_is_the_exact_best_and_worst_by_full_score(bowl):
@@ -90,11 +96,15 @@ def test_rank_pairs_is_the_exact_best_and_worst_by_full_score(bowl):
 
 
 def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
-    def row(score, valid, weight=1.0, viol=0):
-        return {"affordance": "placing", "scene": "s", "example": "placing-bowl",
-                "score": score, "valid": valid, "weight": weight, "violations": viol,
-                "clearance_points": 100, "top": score > 0.8, "pair": 0, "near_site": True,
-                "reasons": ""}
+    from interaction_tensor.evaluation.tuning import COLUMNS
+
+    def row(score, valid, weight=1.0, viol=0, inner=0, touch=1.0):
+        r = {"affordance": "placing", "scene": "s", "example": "placing-bowl",
+             "score": score, "valid": valid, "weight": weight, "violations": viol,
+             "clearance_points": 100, "interior_violations": inner, "interior_points": 200,
+             "top": False, "pair": 0, "near_site": True, "reasons": ""}
+        r.update({c: touch for c in COLUMNS if c.startswith("contact_")})
+        return r
     rows = ([row(0.9, True)] * 8 + [row(0.7, True)] * 2 + [row(0.6, False)] * 6
             + [row(0.95, False, viol=50)] * 4 + [row(0.2, False, weight=10)] * 3)
     c = {r["threshold"]: r for r in curve(rows, limit=0.05)}
@@ -104,6 +114,19 @@ def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
     _, chosen = choose(rows, runs)
     assert 0.6 < chosen["placing"]["threshold"] <= 0.7
     assert chosen["placing"]["clearance_limit"] < 0.5
+    # ties go to the simpler acceptance: no interior or contact test is needed here
+    assert chosen["placing"]["interior_limit"] == 1.0
+    assert chosen["placing"]["contact"][0] == "off"
+
+    # invalid pairs that score as well as the valid ones but lost their contact, and others
+    # with a surface through them: only the new tests can tell them apart
+    rows2 = ([row(0.9, True)] * 8 + [row(0.9, False, touch=0.0)] * 6
+             + [row(0.9, False, inner=100)] * 5)
+    _, chosen2 = choose(rows2, runs)
+    ch = chosen2["placing"]
+    assert ch["contact"][0] != "off" and ch["interior_limit"] < 1
+    assert ch["precision"] == pytest.approx(1.0) and ch["recall"] == pytest.approx(1.0)
+    assert ch["without_new_tests"]["precision"] == pytest.approx(8 / 19)
 
     # the tuning's record is written as one transaction and replaces an earlier one
     from interaction_tensor.evaluation.tuning import TuneResult, write
@@ -131,8 +154,12 @@ def test_train_with_a_tuned_acceptance_and_detect_without_clearance(tmp_path):
     assert main(["train", str(tmp_path / "q.ply"), str(tmp_path / "s.ply"), "--affordance",
                  "box", "-o", str(out), "--acceptance", "placing", "-q"]) == 0
     t = it.InteractionTensor.load(out)
-    assert t.threshold() == ACCEPTANCE["placing"][0]
-    assert t.clearance_limit == ACCEPTANCE["placing"][1]
+    tuned = ACCEPTANCE["placing"]
+    assert t.threshold() == tuned["threshold"]
+    assert t.clearance_limit == tuned["clearance_limit"]
+    assert t.interior_limit == tuned["interior_limit"]
+    assert (t.contact_groups, t.contact_distance, t.contact_fraction,
+            t.contact_angle) == tuned["contact"]
     assert main(["detect", str(tmp_path / "s.ply"), str(out), "-o", str(tmp_path / "d"),
                  "--no-clearance", "--sample-fraction", "0.2", "-q"]) == 0
     import json

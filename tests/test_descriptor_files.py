@@ -77,18 +77,54 @@ def test_tampered_arrays_are_refused_naming_the_field(real, tmp_path, name, how)
         assert "descriptor field" in text, text
         return
     # accepted only where the change leaves a valid descriptor: an optional list emptied
-    # or dropped (clearance points of format version 1, contact or scene points)
-    assert (how in ("empty", "drop") and name in ("clearance_points", "clearance_radius",
-                                                  "contact_points", "scene_points")) or \
+    # or dropped (the placement tests' points of older format versions, contact or scene
+    # points) where its partner is empty as well
+    optional = ("clearance_points", "clearance_radius", "interior_points", "interior_radius",
+                "contact_group_points", "contact_group_ids", "contact_group_normals",
+                "contact_points", "scene_points")
+    assert (how in ("empty", "drop") and name in optional) or \
         (how == "empty" and name == "query_faces"), (name, how)
     assert np.isfinite(t.weighted.points).all()
+
+
+def test_the_real_descriptor_has_every_placement_test(real):
+    header, arrays = real
+    assert header["format_version"] == 3
+    assert len(arrays["interior_points"]) > 0 and len(arrays["contact_group_ids"]) > 0
+
+
+def test_a_version_2_descriptor_loads_without_the_new_tests(real, tmp_path):
+    """A file written before interior points and contact groups existed (format version 2)
+    loads, and detection then skips those two tests."""
+    header, arrays = real
+    old = {k: v for k, v in header.items() if k not in (
+        "interior_limit", "contact_groups", "contact_distance", "contact_fraction",
+        "contact_angle", "ground")}
+    old["format_version"] = 2
+    a = {k: v for k, v in arrays.items() if not k.startswith(("interior_", "contact_group"))}
+    t = it.InteractionTensor.load(_write(tmp_path / "v2.npz", old, a))
+    assert len(t.interior_points) == 0 and len(t.contact_group_ids) == 0
+    assert t.contact_groups == "off" and t.interior_limit == 1.0 and t.ground is None
+    assert len(t.clearance_points) == len(arrays["clearance_points"])
+
+
+def test_contact_group_ids_must_number_the_groups(real, tmp_path):
+    header, arrays = real
+    a = dict(arrays)
+    a["contact_group_ids"] = a["contact_group_ids"].copy() + 1         # no group 0
+    _refused(_write(tmp_path / "g.npz", header, a), "contact_group_ids")
+    a = dict(arrays)
+    a["contact_group_normals"] = a["contact_group_normals"] * 2.0       # not unit vectors
+    _refused(_write(tmp_path / "n.npz", header, a), "contact_group_normals")
 
 
 @pytest.mark.parametrize("field,value", [
     ("radius", float("nan")), ("radius", -1.0), ("radius", "big"), ("scene_spacing", 1e-6),
     ("scene_spacing", 0), ("scene_spacing", None), ("vectors", "bogus"),
     ("clearance_limit", 2.0), ("affordance", ""), ("affordance", 7), ("thresholds", [0.5]),
-    ("meta", "x")])
+    ("meta", "x"), ("interior_limit", 1.5), ("contact_groups", "some"),
+    ("contact_distance", -0.01), ("contact_fraction", 2.0), ("contact_angle", 0.0),
+    ("contact_angle", 120.0), ("ground", "floor"), ("ground", float("inf"))])
 def test_tampered_header_fields_are_refused(real, tmp_path, field, value):
     header, arrays = real
     path = _write(tmp_path / "h.npz", {**header, field: value}, arrays)

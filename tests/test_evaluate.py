@@ -96,6 +96,28 @@ def test_evaluate_merge_equals_one_run(tmp_path, capsys):
     assert sorted(p.name for p in (out / "pictures").glob("*.png")) == sorted(
         p.name for p in (tmp_path / "ab" / "pictures").glob("*.png"))
 
+    # a method run again on the same scenes replaces the earlier run's results for it
+    it_only = [v if v != "iT-weighted,Naive" else "iT-weighted" for v in common]
+    assert main(["evaluate", "--scenes", str(s1), str(s2), "-o", str(tmp_path / "it"),
+                 *it_only, "--no-judge-check"]) == 0
+    assert main(["evaluate-merge", str(tmp_path / "ab"), str(tmp_path / "it"), "-o",
+                 str(tmp_path / "ab_it")]) == 2                  # shared scenes: refused
+    assert main(["evaluate-merge", str(tmp_path / "ab"), str(tmp_path / "it"), "-o",
+                 str(tmp_path / "ab_it"), "--replace", "--quiet"]) == 0
+    for name in ("table1.csv", "runs.csv", "scenes_accepting.csv"):     # rows in any order
+        assert (sorted((tmp_path / "ab_it" / name).read_text().splitlines()) ==
+                sorted((tmp_path / "ab" / name).read_text().splitlines())), name
+    with open(tmp_path / "ab_it" / "judgements.csv") as fh:
+        merged = list(csv.DictReader(fh))
+    with open(tmp_path / "it" / "judgements.csv") as fh:
+        again = list(csv.DictReader(fh))
+    assert [r for r in merged if r["method"] == "iT-weighted"] == again
+    info = json.loads((tmp_path / "ab_it" / "run.json").read_text())["settings"]
+    assert info["methods"] == ["iT-weighted", "Naive"]
+    assert [r["value"] for r in info["per_part"]["methods"]] == [["iT-weighted", "Naive"],
+                                                                 ["iT-weighted"]]
+    capsys.readouterr()
+
     # a merge is itself a part: (a + b) + c gives what a + b + c gives, its parts listed
     s3 = shared_file("scenes/office-desk2.ply")
     assert main(["evaluate", "--scenes", str(s3), "-o", str(tmp_path / "c3"), *common]) == 0

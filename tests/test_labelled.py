@@ -32,8 +32,26 @@ def test_the_set_has_20_valid_and_20_invalid_poses_per_affordance(poses):
     # the hard negatives the old judge passed are there
     cases = {p.case for p in poses if not p.valid}
     for needle in ("hook on a flat top", "sunk 10 cm into the seat", "half off the edge",
-                   "on a top with no tap above", "hovering", "through the wall"):
+                   "on a top with no tap above", "hovering", "through the wall",
+                   "under a bar, not in a basin"):
         assert any(needle in c for c in cases), needle
+
+
+def test_the_bar_traps_have_a_tap_like_bar_above_and_no_basin(poses):
+    """The mugs under a bar pass every filling test but the basin's (what fooled the judge
+    before it had one); the valid mugs are in basins."""
+    from interaction_tensor.evaluation.judge import Judge, JudgeScene
+    from interaction_tensor.examples import interactions, validation
+
+    traps = [p for p in poses if p.scene == "validation:judge_traps"]
+    assert len(traps) == 12 and not any(p.valid for p in traps)
+    judge = Judge.for_example(interactions.build("filling-mug", _objects()))
+    scene = JudgeScene(validation.build_scene("judge_traps").geometry)
+    for p in traps:
+        v = judge.judge(scene, np.asarray(p.pose))
+        assert v.overhead and not v.valid
+        assert len(v.reasons) == 1 and v.reasons[0].startswith("not in a basin"), v.reasons
+    assert "judge_traps" not in validation.scene_names()        # never tuned on
 
 
 def test_the_judge_is_right_on_95_percent_of_each_class(poses):

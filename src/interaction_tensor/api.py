@@ -62,7 +62,8 @@ def load_tensor(tensor):
 def train(query, scene_object, affordance: str = "interaction", *, acceptance: str | None = None,
           normal="up", spacing: float = 0.01, query_points: int = 6000,
           vectors: str = "surface", reference_point=None, seed: int = 0,
-          scale: float | None = None, up: str = "z", settings: TrainSettings | None = None):
+          scale: float | None = None, up: str = "z", settings: TrainSettings | None = None,
+          ground: float | None = None):
     """Fit an Interaction Tensor from one example (what ``itensor train`` does).
 
     Parameters
@@ -81,6 +82,10 @@ def train(query, scene_object, affordance: str = "interaction", *, acceptance: s
         scale an object larger than 10 m is refused (millimetres read as metres)
     settings : a full :class:`TrainSettings` instead of ``normal``, ``spacing``,
         ``query_points``, ``vectors`` and ``seed``
+    ground : height (m, after ``scale`` and ``up``) of the floor the example stands on, if
+        it matters to the interaction (a seated person's feet): not part of the tensor, but
+        the clearance test then knows the floor was there and the contact test asks for it
+        again
 
     Returns the fitted :class:`InteractionTensor` (``.save(path)`` writes the descriptor).
     """
@@ -100,11 +105,15 @@ def train(query, scene_object, affordance: str = "interaction", *, acceptance: s
                                  vectors=vectors)
     if reference_point is not None:
         reference_point = _direction(reference_point, "reference_point")
-    tensor = InteractionTensor.fit(q, s, affordance, settings, reference_point=reference_point)
+    if ground is not None and (isinstance(ground, bool) or not isinstance(ground, (int, float))
+                               or not np.isfinite(ground)):
+        raise SettingsError(f"ground must be a height in metres, got {ground!r}")
+    tensor = InteractionTensor.fit(q, s, affordance, settings, reference_point=reference_point,
+                                   ground=ground)
     if acceptance is not None:
         from .examples.interactions import acceptance as tuned
 
-        tensor.set_acceptance(*tuned(acceptance))
+        tensor.set_acceptance(**tuned(acceptance))
     return tensor
 
 

@@ -13,6 +13,27 @@ sample is never nearer than the surface it lies on, so sparse sampling cannot ca
 violation (it can only hide one). Contact points have ``r`` near 0 and can never be violated;
 the rest of the object must keep at least ``clearance_max - tolerance`` (1.5 cm by default)
 from the scene.
+
+Two more tests of the same kind (ours) complete the placement check; like the clearance test
+they ask only where the scene's samples lie near points fixed to the query object (the
+interior test on the clearance kernel, the contact test by exact nearest samples):
+
+* **Interior**: a person sunk into a sofa or a shelf board through a seated body leaves the
+  body's surface almost untouched (a board meets it along a line, so it violates a few
+  clearance points only), but it passes *through* the body. ``I`` interior points (inside
+  the query mesh, at least ``interior_min_depth`` from its surface) keep their depth ``r``
+  (at most ``interior_max``); a scene sample nearer than ``r - tolerance`` to one lies
+  inside the object. A placement is rejected when more than the descriptor's interior limit
+  of them are violated.
+* **Contact**: the parts of the query that touched the example's scene-object (or the
+  ground it stood on) are grouped (the seat and each foot of a seated person; the inside of
+  a hook; the base of a bowl), group 0 being the one at the reference point. A placement
+  keeps its contact when at least ``contact_fraction`` of a group's points have their
+  nearest scene sample within ``contact_distance`` (and, with ``contact_angle`` below 90
+  degrees, a normal line within that angle of the one the example touched there), for
+  group 0 (``main``) or every group (``all``): a
+  person on a counter top with the feet in the air, or a hook lying on a shelf edge with
+  nothing inside it, loses a contact the example had.
 """
 
 from __future__ import annotations
@@ -23,14 +44,24 @@ from .scoring import rotation_z
 
 #: Nearest-neighbour queries per chunk (bounds memory: about 100 bytes each).
 CHUNK_QUERIES = 2_000_000
+#: Why a placement the score accepted was rejected (``Detection.placement``): not tested
+#: (the score rejected it), kept, or the first test it failed, in the order they run.
+UNTESTED, PLACED, FAILS_CLEARANCE, FAILS_CONTACT, FAILS_INTERIOR = -1, 0, 1, 2, 3
+#: Contact modes: no contact test, the main group (at the reference point), every group.
+CONTACT_MODES = ("off", "main", "all")
+
+
+def point_offsets(points, reference_point, n_orientations: int) -> np.ndarray:
+    """(O, K, 3) training-frame ``points`` relative to a test point, per orientation
+    (``Rz(angle) (c - reference_point)``)."""
+    rot = rotation_z(2 * np.pi * np.arange(n_orientations) / n_orientations)
+    rel = np.asarray(points, float).reshape(-1, 3) - reference_point
+    return np.einsum("oij,kj->oki", rot, rel)
 
 
 def clearance_offsets(tensor, n_orientations: int) -> np.ndarray:
-    """(O, K, 3) clearance points relative to a test point, per orientation
-    (``Rz(angle) (c - reference_point)``)."""
-    rot = rotation_z(2 * np.pi * np.arange(n_orientations) / n_orientations)
-    rel = np.asarray(tensor.clearance_points, float) - tensor.reference_point
-    return np.einsum("oij,kj->oki", rot, rel)
+    """(O, K, 3) clearance points relative to a test point, per orientation."""
+    return point_offsets(tensor.clearance_points, tensor.reference_point, n_orientations)
 
 
 def violations(points: np.ndarray, orient: np.ndarray, offsets: np.ndarray,
@@ -85,6 +116,125 @@ def count_violations(points: np.ndarray, orient: np.ndarray, offsets: np.ndarray
         return np.zeros(len(points), np.int64)
     return _numba_clearance.counts(points, np.ascontiguousarray(orient, np.int64),
                                    offsets[:, active], need[active], grid)
+
+
+def nearest_samples(queries: np.ndarray, scene, grid=None):
+    """Each query's nearest scene sample, exactly: ((Q,) distances in m, (Q,) indices into
+    ``scene.points``); on the Numba grid when one is given, else with the scene's cKDTree
+    (the reference)."""
+    q = np.asarray(queries, np.float64).reshape(-1, 3)
+    if len(q) == 0:
+        return np.zeros(0), np.zeros(0, np.int64)
+    if grid is None:
+        d, i = scene.tree.query(q, workers=-1)
+        return d, np.asarray(i, np.int64)
+    from .kernels import nearest_indices
+
+    i = nearest_indices(grid, q)
+    return np.linalg.norm(scene.points[i] - q, axis=1), i
+
+
+def contact_fractions(points, orient, tensor, tests, n_orientations: int, scene,
+                      grid=None, chunk: int = 8192) -> np.ndarray:
+    """(P, T, G) float64: per placement, contact test ``tests[t]`` = (distance m, angle
+    degrees) and contact group ``g``, the fraction of the group's points whose nearest scene
+    sample lies within the distance and, for an angle below 90, has a normal line within
+    the angle of the example's (rotated with the placement). The nearest sample is found
+    once for all the tests; G = 0 when the descriptor has none. ``chunk`` placements at a
+    time bound the memory."""
+    groups = np.asarray(tensor.contact_group_ids, np.int64)
+    tests = [(float(d), float(a)) for d, a in tests]
+    n_g = int(groups.max()) + 1 if len(groups) else 0
+    out = np.zeros((len(points), len(tests), n_g))
+    if n_g == 0 or len(points) == 0:
+        return out
+    offsets = point_offsets(tensor.contact_group_points, tensor.reference_point, n_orientations)
+    rot = rotation_z(2 * np.pi * np.arange(n_orientations) / n_orientations)
+    normals = np.einsum("oij,kj->oki", rot, np.asarray(tensor.contact_group_normals, float))
+    size = np.bincount(groups, minlength=n_g).astype(float)
+    member = groups[None, :] == np.arange(n_g)[:, None]                       # (G, K)
+    points = np.asarray(points, float)
+    orient = np.asarray(orient, np.int64)
+    for s in range(0, len(points), chunk):
+        o = orient[s:s + chunk]
+        q = points[s:s + chunk, None, :] + offsets[o]                          # (p, K, 3)
+        d, i = nearest_samples(q.reshape(-1, 3), scene, grid)
+        d = d.reshape(q.shape[:2])
+        cos = None
+        if any(a < 90 for _, a in tests):
+            cos = np.abs(np.einsum("pki,pki->pk", scene.normals[i].reshape(q.shape),
+                                   normals[o]))
+        for t, (dist, angle) in enumerate(tests):
+            touch = d <= dist
+            if angle < 90:
+                touch &= cos >= np.cos(np.radians(angle)) - 1e-12
+            out[s:s + chunk, t] = (touch.astype(float) @ member.T) / size
+    return out
+
+
+def contact_kept(fractions: np.ndarray, mode: str, fraction: float) -> np.ndarray:
+    """(P,) bool: placements whose contact groups (``fractions`` (P, G) from
+    :func:`contact_fractions`) pass: group 0 (``main``) or every group (``all``) has at least
+    ``fraction`` of its points touching; always true with ``off`` or no groups."""
+    if mode not in CONTACT_MODES:
+        raise ValueError(f"contact mode must be one of {CONTACT_MODES}, got {mode!r}")
+    if mode == "off" or fractions.shape[1] == 0:
+        return np.ones(len(fractions), bool)
+    f = fractions[:, :1] if mode == "main" else fractions
+    return (f >= fraction - 1e-9).all(axis=1)
+
+
+def interior_violations(points, orient, tensor, tolerance: float, n_orientations: int, scene,
+                        grid=None) -> np.ndarray:
+    """(P,) int64: interior points of each placement with a scene sample nearer than their
+    depth less ``tolerance`` (the scene passes through the object there)."""
+    if len(tensor.interior_points) == 0:
+        return np.zeros(len(points), np.int64)
+    offsets = point_offsets(tensor.interior_points, tensor.reference_point, n_orientations)
+    return count_violations(points, orient, offsets, tensor.interior_radius, tolerance, scene,
+                            grid)
+
+
+def check_placements(points, orient, tensor, settings, scene, grid=None):
+    """The placement tests of pairs the score accepted, in order: clearance (every pair),
+    contact (those that kept their clearance), interior (those that also kept their
+    contact).
+
+    Parameters
+    ----------
+    points : (P, 3) test points; orient : (P,) orientation indices
+    tensor : the descriptor (its points, radii and limits)
+    settings : DetectSettings (which tests run, tolerances, the clearance override)
+
+    Returns ``(clearance violations (P,) int64, outcome (P,) int8)``, outcome
+    :data:`PLACED` or the first test failed (:data:`FAILS_CLEARANCE`, ...).
+    """
+    n_o = settings.n_orientations
+    p = len(points)
+    outcome = np.full(p, PLACED, np.int8)
+    viol = np.zeros(p, np.int64)
+    k = len(tensor.clearance_points)
+    if settings.clearance and k and p:
+        viol = count_violations(points, orient, clearance_offsets(tensor, n_o),
+                                tensor.clearance_radius, settings.clearance_tolerance, scene,
+                                grid)
+        limit = (settings.clearance_max_violations if settings.clearance_max_violations
+                 is not None else tensor.clearance_limit)
+        outcome[viol > limit * k] = FAILS_CLEARANCE
+    mode = tensor.contact_groups if settings.contact else "off"
+    todo = np.flatnonzero(outcome == PLACED)
+    if mode != "off" and len(tensor.contact_group_ids) and len(todo):
+        frac = contact_fractions(points[todo], orient[todo], tensor,
+                                 [(tensor.contact_distance, tensor.contact_angle)], n_o, scene,
+                                 grid)[:, 0]
+        outcome[todo[~contact_kept(frac, mode, tensor.contact_fraction)]] = FAILS_CONTACT
+    todo = np.flatnonzero(outcome == PLACED)
+    n_int = len(tensor.interior_points)
+    if settings.interior and n_int and tensor.interior_limit < 1 and len(todo):
+        iv = interior_violations(points[todo], orient[todo], tensor,
+                                 settings.interior_tolerance, n_o, scene, grid)
+        outcome[todo[iv > tensor.interior_limit * n_int]] = FAILS_INTERIOR
+    return viol, outcome
 
 
 def nearest_distance_function(scene, grid=None, bound: float | None = None):

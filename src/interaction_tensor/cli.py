@@ -57,7 +57,13 @@ def detection_options(p) -> None:
     p.add_argument("--no-early-exit", action="store_true",
                    help="compare every keypoint of every candidate")
     p.add_argument("--no-clearance", action="store_true",
-                   help="accept on the score alone, without the clearance test")
+                   help="skip the clearance test (the scene nearer the object than in the "
+                        "example)")
+    p.add_argument("--no-contact", action="store_true",
+                   help="skip the contact test (the parts that touched in the example touch "
+                        "again)")
+    p.add_argument("--no-interior", action="store_true",
+                   help="skip the interior test (no scene surface through the object)")
     p.add_argument("--backend", choices=("auto", "numba", "numpy", "torch"), default="auto",
                    help="scoring backend; torch runs on a CUDA device when present "
                         "(pip install 'interaction-tensor[torch]')")
@@ -132,7 +138,7 @@ def cmd_train(args) -> int:
     tensor = train(args.query, args.scene_object, args.affordance, acceptance=args.acceptance,
                    normal=args.normal, spacing=args.spacing, query_points=args.query_points,
                    vectors=args.vectors, reference_point=args.reference_point, seed=args.seed,
-                   scale=args.scale, up=args.up)
+                   scale=args.scale, up=args.up, ground=args.ground)
     out = tensor.save(args.output)
     seconds = time.perf_counter() - t0
     if args.json:
@@ -162,6 +168,7 @@ def _detect_settings(args):
     from .settings import DetectSettings
 
     return DetectSettings(early_exit=not args.no_early_exit, clearance=not args.no_clearance,
+                          contact=not args.no_contact, interior=not args.no_interior,
                           **{field: getattr(args, dest) for field, dest in _SETTING_OPTIONS.items()})
 
 
@@ -210,9 +217,12 @@ def _report(args, result, outdir) -> None:
     _say(args, f"scored {st['pairs_scored']} (point, orientation) pairs in "
                f"{st['seconds']['scoring']:.2f} s"
                f"{f' ({rate:,.0f} candidates/s)' if rate else ''} ({st['backend']}"
-               f"{' on ' + st['device'] if st['backend'] == 'torch' else ''}); accepted "
-               f"{st['pairs_accepted']}; {st['mean_comparisons_per_decision']:.0f} keypoint "
-               "comparisons per decision")
+               f"{' on ' + st['device'] if st['backend'] == 'torch' else ''}); "
+               f"{st['mean_comparisons_per_decision']:.0f} keypoint comparisons per decision")
+    _say(args, f"accepted {st['pairs_accepted']} of the {st['pairs_accepted_by_score']} the "
+               f"score accepted (placement tests failed: clearance "
+               f"{st['pairs_failing_clearance']}, contact {st['pairs_failing_contact']}, "
+               f"interior {st['pairs_failing_interior']})")
     if st["backend"] == "torch" and st["device"] == "cpu":
         print("itensor: note: no CUDA device, so the torch backend ran on the CPU, where the "
               "default Numba backend is much faster", file=sys.stderr)
@@ -232,6 +242,9 @@ def summary(result, outdir) -> dict:
             "scene_points": st["scene_points"], "test_points_sampled": st["test_points_sampled"],
             "candidates": st["candidates_after_normal_filter"],
             "pairs_scored": st["pairs_scored"], "pairs_accepted": st["pairs_accepted"],
+            "pairs_accepted_by_score": st["pairs_accepted_by_score"],
+            **{k: st[k] for k in ("pairs_failing_clearance", "pairs_failing_contact",
+                                  "pairs_failing_interior")},
             "candidates_per_second": st.get("candidates_per_second"),
             "pairs_per_second": st.get("pairs_per_second"), "seconds": st["seconds"],
             "predictions": [{"score": p.score, "position": p.position.tolist(),
@@ -372,10 +385,15 @@ def build_parser() -> argparse.ArgumentParser:
                    help="provenance vectors to the sampled surface (default) or to the samples")
     p.add_argument("--reference-point", type=_vector, default=None,
                    help="override the reference point p_scene as x,y,z (metres)")
+    p.add_argument("--ground", type=number(float, low=-1e4, high=1e4), default=None,
+                   help="height (m) of the floor the example stands on, where the interaction "
+                        "needs it (a seated person's feet): the clearance and contact tests "
+                        "then count it")
     p.add_argument("--acceptance", choices=("placing", "filling", "hanging", "sitting", "riding"),
                    default=None,
-                   help="accept as the paper's affordance does (S_aff and clearance limit tuned "
-                        "on validation scenes) instead of 0.9 x the example's own score")
+                   help="accept as the paper's affordance does (S_aff, clearance, interior and "
+                        "contact tests tuned on validation scenes) instead of 0.9 x the "
+                        "example's own score")
     seed_option(p)
     quiet_option(p)
     p.add_argument("--json", action="store_true",

@@ -113,8 +113,10 @@ def cmd_tune(args) -> int:
     write(res, args.output)
     if not args.quiet:
         for aff, ch in res.chosen.items():
+            mode, dist, frac, angle = ch["contact"]
             print(f"{aff:<8} S_aff {ch['threshold']:.3f}  clearance limit "
-                  f"{ch['clearance_limit']:.2f}")
+                  f"{ch['clearance_limit']:.2f}  interior limit {ch['interior_limit']:.2f}  "
+                  f"contact {mode} {dist:g} m {frac:g} {angle:g} deg")
         print(f"wrote {args.output}/tuning.md, tuning.json, tuning_pairs.csv in "
               f"{res.settings['total_seconds']} s")
     return 0
@@ -125,7 +127,7 @@ def cmd_evaluate_merge(args) -> int:
     from .evaluation.report import judge_markdown, table_markdown
 
     log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
-    res = merge(args.runs, args.output, log, allow=args.allow_differing)
+    res = merge(args.runs, args.output, log, allow=args.allow_differing, replace=args.replace)
     if not args.quiet:
         print(table_markdown(res.table, tuple(res.settings.get("methods") or ())))
         if res.judge_accuracy:
@@ -151,8 +153,8 @@ def register(sub) -> None:
     quiet_option(q)
     q.set_defaults(func=cmd_examples_build)
 
-    p = sub.add_parser("tune", help="tune S_aff and the clearance limit of each affordance on "
-                                    "the procedural validation scenes")
+    p = sub.add_parser("tune", help="tune the acceptance (S_aff and the placement tests) of each "
+                                    "affordance on the procedural validation scenes")
     p.add_argument("-o", "--output", required=True, help="output directory")
     p.add_argument("--objects", default=None, help="directory of real query objects")
     p.add_argument("--examples", nargs="*", help="only these examples (default: all 8)")
@@ -189,7 +191,8 @@ def register(sub) -> None:
     p.set_defaults(func=cmd_evaluate)
 
     p = sub.add_parser("evaluate-merge",
-                       help="merge `itensor evaluate` runs made on disjoint scene subsets")
+                       help="merge `itensor evaluate` runs made on disjoint scene subsets "
+                            "(or, with --replace, a method run again)")
     p.add_argument("runs", nargs="+", help="output directories of the runs (same settings)")
     p.add_argument("-o", "--output", required=True, help="output directory")
     p.add_argument("--allow-differing", default=(), metavar="KEY[,KEY...]",
@@ -197,5 +200,9 @@ def register(sub) -> None:
                    help="settings of run.json the runs may hold differently (e.g. icp_backend); "
                         "the merged run.json lists each run's value under per_part "
                         "(default: none, all settings must agree)")
+    p.add_argument("--replace", action="store_true",
+                   help="the runs may share scenes: a later run's results for a (scene, "
+                        "method) it ran replace the earlier runs' (a method evaluated again, "
+                        "e.g. after new tuning; their methods are listed under per_part)")
     quiet_option(p)
     p.set_defaults(func=cmd_evaluate_merge)

@@ -106,10 +106,11 @@ class Detection:
     candidate_indices : (C,) test points that passed the normal filter
     pair_point, pair_orientation : (P,) scene index and orientation of every scored pair
     pairs : PairScores of those pairs; ``pairs.accepted`` is the final decision (score and
-        clearance)
+        placement tests)
     score_accepted : (P,) bool, accepted by the score alone
     clearance_violations : (P,) int16 (int32 past 32,767 clearance points), clearance points
         violated (-1 where not tested: pairs the score rejected, or no clearance test)
+    placement : (P,) int8, the outcome of the placement tests (see the attribute)
     heat : (N,) per scene point: best accepted score near it (0 where none)
     accepted_count : (N,) accepted orientations at each scene point
     predictions : top-k after suppression, best first
@@ -134,6 +135,10 @@ class Detection:
     #: (N + 1,) the largest score keypoints k.. can still add, in the order they were
     #: compared: ``score + rest[decided_at]`` bounds a rejected pair's full score
     rest: np.ndarray | None = None
+    #: (P,) int8 outcome of the placement tests: -1 not tested (the score rejected the
+    #: pair), 0 placed, else the first test failed (1 clearance, 2 contact, 3 interior:
+    #: :mod:`.clearance`)
+    placement: np.ndarray | None = None
 
     @property
     def accepted(self) -> np.ndarray:
@@ -366,35 +371,28 @@ def _score_all(scene, jobs, backend, index, settings, progress, label, use_cache
     return [PairScores(t, a, d, c) for t, a, d, c in zip(totals, acc, at, cmp_)]
 
 
-def clearance_limit(tensor: InteractionTensor, settings: DetectSettings) -> float:
-    """Fraction of clearance points a placement may violate: the settings' own, else the
-    descriptor's."""
-    if settings.clearance_max_violations is not None:
-        return float(settings.clearance_max_violations)
-    return float(tensor.clearance_limit)
-
-
 def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_orient,
                     pairs: PairScores, grid=None):
-    """Apply the clearance test to the pairs the score accepted (in place on
-    ``pairs.accepted``). Returns (score_accepted (P,) bool, violations (P,) int, -1 where not
-    tested)."""
-    from .clearance import clearance_offsets, count_violations
+    """Apply the placement tests (clearance, contact, interior: :mod:`.clearance`) to the
+    pairs the score accepted (in place on ``pairs.accepted``). Returns (score_accepted (P,)
+    bool, clearance violations (P,) int, -1 where not tested, outcome (P,) int8: -1 where
+    not tested, else :data:`.clearance.PLACED` or the first test failed)."""
+    from .clearance import UNTESTED, PLACED, check_placements
 
     score_acc = pairs.accepted.copy()
     k = len(tensor.clearance_points)
     viol = np.full(len(pairs.accepted), -1, np.int16 if k < 2 ** 15 else np.int32)
-    if not settings.clearance or k == 0:
-        return score_acc, viol
+    outcome = np.full(len(pairs.accepted), UNTESTED, np.int8)
     idx = np.flatnonzero(score_acc)
-    offsets = clearance_offsets(tensor, settings.n_orientations)
     for s in range(0, len(idx), 262_144):          # bounds the gathered positions
         sl = idx[s:s + 262_144]
-        viol[sl] = count_violations(scene.points[pair_point[sl]], pair_orient[sl], offsets,
-                                    tensor.clearance_radius, settings.clearance_tolerance,
-                                    scene, grid)
-    pairs.accepted[idx[viol[idx] > clearance_limit(tensor, settings) * k]] = False
-    return score_acc, viol
+        v, outcome[sl] = check_placements(scene.points[pair_point[sl]],
+                                          np.asarray(pair_orient[sl], np.int64), tensor,
+                                          settings, scene, grid)
+        if settings.clearance and k:
+            viol[sl] = v
+    pairs.accepted[idx[outcome[idx] != PLACED]] = False
+    return score_acc, viol, outcome
 
 
 def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair_orient,
@@ -416,7 +414,12 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
     timings["predictions"] = time.perf_counter() - t3
     timings["total"] = time.perf_counter() - t0
     decided = pairs.decided_at
-    score_acc, viol = clearance if clearance is not None else (pairs.accepted.copy(), None)
+    score_acc, viol, outcome = (clearance if clearance is not None
+                                else (pairs.accepted.copy(), None, None))
+    from .clearance import FAILS_CLEARANCE, FAILS_CONTACT, FAILS_INTERIOR
+
+    def failing(code):
+        return int((outcome == code).sum()) if outcome is not None else 0
     stats = {
         "scene_points": int(len(scene)),
         "scene_notes": list(getattr(scene, "notes", [])),
@@ -425,7 +428,9 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
         "pairs_scored": int(len(pair_point)),
         "pairs_accepted": int(pairs.accepted.sum()),
         "pairs_accepted_by_score": int(score_acc.sum()),
-        "pairs_failing_clearance": int((score_acc & ~pairs.accepted).sum()),
+        "pairs_failing_clearance": failing(FAILS_CLEARANCE),
+        "pairs_failing_contact": failing(FAILS_CONTACT),
+        "pairs_failing_interior": failing(FAILS_INTERIOR),
         "keypoint_comparisons": int(pairs.comparisons),
         "keypoint_comparisons_to_decision": int(decided.sum()),
         "mean_comparisons_per_decision": float(decided.mean()) if len(decided) else 0.0,
@@ -446,7 +451,8 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
                              if timings.get("scoring", 0) > 0 else None),
     }
     return Detection(scene, tensor, settings, threshold, test_idx, cand, pair_point,
-                     pair_orient, pairs, heat, count, predictions, stats, score_acc, viol, rest)
+                     pair_orient, pairs, heat, count, predictions, stats, score_acc, viol, rest,
+                     outcome)
 
 
 def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = None,
@@ -520,8 +526,9 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
 def full_scores(det: Detection, idx: np.ndarray):
     """Full scores (every keypoint) and clearance of pairs ``idx`` of a detection.
 
-    Returns (scores (I,) float64, clearance_ok (I,) bool). Accepted pairs are read off (they
-    were completed); the others are scored again without early exit.
+    Returns (scores (I,) float64, placed (I,) bool: the pair passes the placement tests,
+    clearance, contact and interior). Accepted pairs are read off (they were completed); the
+    others are scored again without early exit.
     """
     idx = np.asarray(idx, np.int64)
     st = det.settings
@@ -541,29 +548,24 @@ def full_scores(det: Detection, idx: np.ndarray):
         else:
             scores[redo] = score_pairs(pts, orient, table, det.scene, 2.0,
                                        vectors=det.tensor.vectors, early_exit=False).score
-    ok = np.ones(len(idx), bool)
-    k = len(det.tensor.clearance_points)
-    if st.clearance and k:
-        from .clearance import clearance_offsets, count_violations
+    from .clearance import PLACED, UNTESTED, check_placements
 
-        viol = det.clearance_violations[idx].copy()
-        todo = viol < 0
-        if todo.any():
-            grid = det.scene.grid() if resolve_backend(st.backend) == "numba" else None
-            viol[todo] = count_violations(det.scene.points[det.pair_point[idx[todo]]],
-                                          det.pair_orientation[idx[todo]],
-                                          clearance_offsets(det.tensor, st.n_orientations),
-                                          det.tensor.clearance_radius, st.clearance_tolerance,
-                                          det.scene, grid)
-        ok = viol <= clearance_limit(det.tensor, st) * k
-    return scores, ok
+    outcome = (det.placement[idx].copy() if det.placement is not None
+               else np.full(len(idx), UNTESTED, np.int8))
+    todo = outcome == UNTESTED
+    if todo.any():
+        grid = det.scene.grid() if resolve_backend(st.backend) == "numba" else None
+        outcome[todo] = check_placements(det.scene.points[det.pair_point[idx[todo]]],
+                                         np.asarray(det.pair_orientation[idx[todo]], np.int64),
+                                         det.tensor, st, det.scene, grid)[1]
+    return scores, outcome == PLACED
 
 
 def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block: int = 2048,
                max_evaluations: int = 50_000):
     """The ``k`` best (or worst) pairs of a detection by full score, ``radius`` apart.
 
-    Best: pairs that pass the clearance test rank before those that do not, then by full
+    Best: pairs that pass the placement tests rank before those that do not, then by full
     score. Worst: by full score alone (lowest first). Rejected pairs kept only a partial score; their full score lies between it
     and ``score + rest[decided_at]``, so pairs are scored fully in the order of those bounds
     until no unscored pair can enter the k (branch and bound: exact, up to

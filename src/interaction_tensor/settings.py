@@ -75,6 +75,33 @@ class TrainSettings:
     #: Fraction of the clearance points a placement may violate before detection rejects it
     #: (stored in the descriptor; ours).
     clearance_limit: float = 0.05
+    #: Interior points: points inside the query mesh, at least ``interior_min_depth`` (m)
+    #: from its surface, whose depth (at most ``interior_max``) the scene must not come
+    #: within: a surface passing through the object (a board through a seated body) meets
+    #: many of them, a surface touching it none (see clearance.py). 0 disables it; a point
+    #: cloud query has none (ours).
+    interior_points: int = 512
+    interior_min_depth: float = 0.015
+    interior_max: float = 0.05
+    #: Fraction of the interior points a placement may violate (stored in the descriptor;
+    #: 1 turns the test off; ours).
+    interior_limit: float = 0.05
+    #: Contact groups: the query's samples within ``contact_tolerance`` of the scene-object
+    #: (or of the example's ground plane) joined into groups by links of ``contact_link``
+    #: (m), at most ``contact_group_points`` kept per group (ours).
+    contact_group_points: int = 32
+    contact_link: float = 0.03
+    #: The contact test stored in the descriptor: ``main`` (the group at the reference
+    #: point), ``all`` groups or ``off``; a group keeps its contact when at least
+    #: ``contact_fraction`` of its points have a scene sample within ``contact_distance`` (m)
+    #: (ours; the paper's examples carry values tuned per affordance).
+    contact_groups: str = "main"
+    contact_distance: float = 0.02
+    contact_fraction: float = 0.25
+    #: ... and, below 90, the normal line of that nearest sample within this angle (degrees)
+    #: of the normal the example's scene-object (or ground) had there: a hook's inner arc
+    #: meets a round rail's normals all around, a flat shelf top's only at its apex (ours).
+    contact_angle: float = 90.0
     #: Seed of every random step of training.
     seed: int = 0
 
@@ -93,6 +120,17 @@ class TrainSettings:
         _check(self.vectors in ("surface", "points"), "vectors must be 'surface' or 'points'")
         _check(0 < self.calibration_ratio <= 1, "calibration_ratio must be in (0, 1]")
         _check(self.contact_tolerance > 0, "contact_tolerance must be positive")
+        _check(self.interior_points >= 0, "interior_points must be non-negative")
+        _check(0 < self.interior_min_depth <= self.interior_max,
+               "interior_min_depth must be positive and at most interior_max (metres)")
+        _check(0 <= self.interior_limit <= 1, "interior_limit must be in [0, 1]")
+        _check(self.contact_group_points >= 1, "contact_group_points must be at least 1")
+        _check(self.contact_link > 0, "contact_link must be positive (metres)")
+        _check(self.contact_groups in ("off", "main", "all"),
+               "contact_groups must be 'off', 'main' or 'all'")
+        _check(self.contact_distance > 0, "contact_distance must be positive (metres)")
+        _check(0 <= self.contact_fraction <= 1, "contact_fraction must be in [0, 1]")
+        _check(0 < self.contact_angle <= 90, "contact_angle must be in (0, 90] degrees")
         n = [float(v) for v in self.affordance_normal]
         _check(len(n) == 3 and math.isfinite(sum(n)) and sum(v * v for v in n) > 0,
                "affordance_normal must be a non-zero 3-vector")
@@ -160,6 +198,15 @@ class DetectSettings:
     clearance: bool = True
     clearance_tolerance: float = 0.005
     clearance_max_violations: float | None = None
+    #: Contact test (when the descriptor has contact groups and its mode is not ``off``): the
+    #: parts that touched the example's scene-object must touch the scene again (ours; see
+    #: clearance.py).
+    contact: bool = True
+    #: Interior test (when the descriptor has interior points): no scene sample nearer than
+    #: ``depth - interior_tolerance`` to more than the descriptor's interior limit of them.
+    #: The 1 cm tolerance lets a person sink a centimetre into a soft seat (ours).
+    interior: bool = True
+    interior_tolerance: float = 0.01
     #: Predictions kept after non-maximum suppression.
     top_k: int = 10
     #: Suppression radius (m) of the top-k; None: the query object's width (the larger side
@@ -202,6 +249,8 @@ class DetectSettings:
                "clearance_tolerance must be non-negative (metres)")
         _check(self.clearance_max_violations is None or 0 <= self.clearance_max_violations <= 1,
                "clearance_max_violations must be in [0, 1]")
+        _check(self.interior_tolerance >= 0,
+               "interior_tolerance must be non-negative (metres)")
         _check(self.nms_radius is None or self.nms_radius >= 0, "nms_radius must be >= 0")
         _check(self.scene_spacing is None or (math.isfinite(self.scene_spacing) and
                                               MIN_SPACING <= self.scene_spacing <= 1.0),

@@ -37,9 +37,13 @@ Tests, by affordance (``tests`` in :data:`TESTS`):
    footprint at the height of the example's support point (2 cm below to 1 cm above) form the support
    polygon; the centre of mass (the centroid of the object's surface samples) must project
    inside it by ``support_margin`` = 1 cm. An object half off an edge fails.
-4. **A tap above** (filling). Scene points above the opening (within 3 cm of its axis, 2 to
-   30 cm above the rim) that are not a ceiling or a shelf (the scene in that height range
-   covers at most half of the 15 cm disk around the opening).
+4. **A tap above, in a basin** (filling). Scene points above the opening (within 3 cm of its
+   axis, 2 to 30 cm above the rim) that are not a ceiling or a shelf (the scene in that
+   height range covers at most half of the 15 cm disk around the opening); and walls around
+   the object, as a sink's, a washbasin's or a dispenser niche's: scene surface between the
+   object's side and 30 cm from its axis, from 2 cm above its support up to its rim, in at
+   least 5 of 8 sectors around it (a mug on the floor under a table's stretcher, or on a
+   counter under a towel bar, has walls on a few sides at most).
 5. **Through the loop** (hanging). The hook's (the strap's) inner disk must be crossed by the
    scene: the rail, peg, door top or panel edge passes through the loop, so the object hangs
    from it. A hanger standing on a flat top or beside an edge fails.
@@ -75,7 +79,7 @@ from . import collision
 #: The tests of each affordance (module docstring).
 TESTS = {
     "placing": ("penetration", "contact", "support"),
-    "filling": ("penetration", "contact", "support", "overhead"),
+    "filling": ("penetration", "contact", "support", "overhead", "basin"),
     "hanging": ("penetration", "contact", "loop"),
     "sitting": ("penetration", "contact", "support", "feet"),
     "riding": ("penetration", "contact", "astride", "legroom"),
@@ -113,6 +117,9 @@ class JudgeSettings:
     overhead_range: tuple = (0.02, 0.30)
     overhead_disk: float = 0.15
     overhead_max_cover: float = 0.5
+    basin_radius: float = 0.30
+    basin_height: tuple = (0.02, 0.0)          # above the support, above the rim
+    basin_sectors: int = 5                     # of 8
     loop_fraction: float = 0.85
     feet_reach: float = 0.25
     ground_radius: float = 1.5
@@ -139,6 +146,7 @@ class Verdict:
     contact: float
     support_margin: float | None = None
     overhead: bool | None = None
+    basin: int | None = None
     loop: bool | None = None
     feet_gap: float | None = None
     astride: bool | None = None
@@ -150,7 +158,8 @@ class Verdict:
             return None if v is None else (None if not np.isfinite(v) else round(float(v), nd))
         return {"valid": bool(self.valid), "penetration_m": r(self.penetration),
                 "contact": r(self.contact, 3), "support_margin_m": r(self.support_margin),
-                "overhead": self.overhead, "loop": self.loop, "feet_gap_m": r(self.feet_gap),
+                "overhead": self.overhead, "basin_sectors": self.basin, "loop": self.loop,
+                "feet_gap_m": r(self.feet_gap),
                 "astride": self.astride, "legroom": self.legroom,
                 "reasons": list(self.reasons)}
 
@@ -360,6 +369,11 @@ class Judge:
             verdict.overhead = self._overhead(scene, moved(self.opening))
             if not verdict.overhead:
                 reasons.append("no tap-like surface above the opening")
+        if "basin" in self.tests:
+            verdict.basin = self._basin(scene, com, moved(self.support_point)[2],
+                                        moved(self.opening)[2])
+            if verdict.basin < st.basin_sectors:
+                reasons.append(f"not in a basin (walls on {verdict.basin} of 8 sides)")
         if "loop" in self.tests:
             verdict.loop = scene.collider.collides(self.loop_body, pose)
             if not verdict.loop:
@@ -418,6 +432,24 @@ class Judge:
         cells = np.unique(np.floor(disk[:, :2] / cell).astype(np.int64), axis=0)
         cover = len(cells) * cell ** 2 / (np.pi * st.overhead_disk ** 2)
         return bool(cover <= st.overhead_max_cover)
+
+    def _basin(self, scene: JudgeScene, com, support_z: float, rim_z: float) -> int:
+        """Of 8 sectors around the object's axis, how many hold scene surface between its
+        side and ``basin_radius``, from ``basin_height[0]`` above the support to
+        ``basin_height[1]`` above the rim: the walls of a sink, a washbasin or a niche."""
+        st = self.settings
+        lo, hi = support_z + st.basin_height[0], rim_z + st.basin_height[1]
+        centre = np.r_[com[:2], (lo + hi) / 2]
+        idx = np.asarray(scene.tree.query_ball_point(
+            centre, float(np.hypot(st.basin_radius, (hi - lo) / 2))), np.int64)
+        p = scene.points[idx]
+        d = p[:, :2] - com[:2]
+        r = np.hypot(d[:, 0], d[:, 1])
+        side = float(np.linalg.norm(self.samples[:, :2] - self.com[:2], axis=1).max())
+        wall = (p[:, 2] >= lo) & (p[:, 2] <= hi) & (r > side + st.spacing) & \
+            (r <= st.basin_radius)
+        sector = np.floor((np.arctan2(d[wall, 1], d[wall, 0]) + np.pi) / (np.pi / 4))
+        return int(len(np.unique(np.clip(sector, 0, 7))))
 
     def _feet_gap(self, scene: JudgeScene, feet: list, com) -> float:
         """Largest distance (m) from a sole down to the highest scene surface under it (the

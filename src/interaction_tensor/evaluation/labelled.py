@@ -242,6 +242,14 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
             got = _validation_poses(ex, name, vs, jscene)
             out += got
         log(f"{name}: {len(out)} poses so far")
+    if scenes is None:
+        # the judge-only traps: a mug under a narrow bar, not in a basin
+        ex = examples["filling"]
+        for point, note in validation.JUDGE_TRAPS:
+            for angle in (0.0, 2.0):
+                out.append(_entry(ex, "validation:judge_traps", site_pose(ex, point, angle),
+                                  False, "under a bar, not in a basin", note))
+        log(f"judge_traps: {len(out)} poses so far")
     if shared_dir is not None:
         for aff, scene, point, angle, valid, case, note in HAND_POSED:
             ex = examples[aff]

@@ -114,12 +114,31 @@ def load_run(directory) -> "EvalResult":
                       timings=timings, settings=settings)
 
 
-def merge(directories, out_dir, log=print, allow=()) -> "EvalResult":
+def _replace_methods(parts: list) -> None:
+    """In place: each part's records of a (scene, method) it ran drop those of earlier
+    parts (the judgements, runs, sampling rows and timings of that scene and method)."""
+    for i, later in enumerate(parts):
+        done = {(r["scene"], r["method"]) for r in later.runs}
+        for earlier in parts[:i]:
+            for name in ("judgements", "runs", "timings"):
+                rows = getattr(earlier, name)
+                setattr(earlier, name, [r for r in rows
+                                        if (r.get("scene"), r.get("method")) not in done])
+            earlier.sampling = [r for r in earlier.sampling
+                                if (r["scene"], "iT-" + r["keypoints"]) not in done]
+
+
+def merge(directories, out_dir, log=print, allow=(), replace: bool = False) -> "EvalResult":
     """Merge the runs in ``directories`` (disjoint scenes, equal settings) into ``out_dir``.
 
     ``allow``: settings the parts may hold differently (e.g. ``icp_backend`` when one part
     ran where Open3D could not load); the merged ``run.json`` then lists each part's value
-    of them under ``per_part``, so that no table hides the difference."""
+    of them under ``per_part``, so that no table hides the difference.
+
+    ``replace``: the parts may share scenes; a later part's results for a (scene, method)
+    it ran replace the earlier parts' (a method run again with new settings on the same
+    scenes; the parts' ``methods`` may then differ and are listed under ``per_part``, as
+    is every key of ``allow``)."""
     from .report import write_all
     from .runner import METHODS, EvalResult, metrics
 
@@ -127,6 +146,7 @@ def merge(directories, out_dir, log=print, allow=()) -> "EvalResult":
     if len(dirs) < 2:
         raise InputError(None, "give at least two evaluation directories to merge")
     parts = [load_run(d) for d in dirs]
+    allow = tuple(allow) + (("methods",) if replace and "methods" not in allow else ())
     skip = _PER_PART | {"per_part"} | set(allow)
     base = {k: v for k, v in parts[0].settings.items() if k not in skip}
     seen: dict[str, Path] = {}
@@ -136,11 +156,15 @@ def merge(directories, out_dir, log=print, allow=()) -> "EvalResult":
         if diff:
             raise InputError(d, f"settings differ from {dirs[0]}: {', '.join(diff)}")
         for s in p.settings.get("scenes", []):
-            if s in seen:
-                raise InputError(d, f"scene {s} is also in {seen[s]}")
+            if s in seen and not replace:
+                raise InputError(d, f"scene {s} is also in {seen[s]} (--replace lets a "
+                                    "later run replace the methods it ran)")
             seen[s] = d
+    if replace:
+        _replace_methods(parts)
     res = EvalResult(settings={**parts[0].settings,
-                               "scenes": [s for p in parts for s in p.settings["scenes"]],
+                               "scenes": list(dict.fromkeys(
+                                   s for p in parts for s in p.settings["scenes"])),
                                # the parts ran side by side: the longest is the wall time
                                "total_seconds": max(p.settings.get("total_seconds") or 0
                                                     for p in parts),
@@ -167,7 +191,10 @@ def merge(directories, out_dir, log=print, allow=()) -> "EvalResult":
         res.sampling += p.sampling
         res.timings += [t for t in p.timings if t["stage"] != "train" or p is parts[0]]
     res.judge_accuracy = next((p.judge_accuracy for p in parts if p.judge_accuracy), [])
-    methods = tuple(m for m in METHODS if m in set(base.get("methods") or METHODS))
+    ran = {m for p in parts for m in (p.settings.get("methods") or METHODS)}
+    methods = tuple(m for m in METHODS if m in ran)
+    if replace:
+        res.settings["methods"] = list(methods)
     res.table = metrics(res.judgements, methods, res.runs)
 
     from ..io import atomic_dir
@@ -178,6 +205,7 @@ def merge(directories, out_dir, log=print, allow=()) -> "EvalResult":
             for png in sorted((d / "pictures").glob("*.png")):
                 (tmp / "pictures").mkdir(exist_ok=True)
                 shutil.copy2(png, tmp / "pictures" / png.name)
-    log(f"merged {len(dirs)} runs ({len(res.settings['scenes'])} scenes, "
+    log(f"merged {len(dirs)} runs{' (later ones replacing methods)' if replace else ''} "
+        f"({len(res.settings['scenes'])} scenes, "
         f"{len(res.judgements)} judgements) into {out_dir}")
     return res

@@ -1,25 +1,30 @@
-"""Tune the acceptance threshold S_aff of each affordance on the procedural validation scenes.
+"""Tune the acceptance of each affordance on the procedural validation scenes.
 
-The paper tuned S_aff by hand per affordance. Here it is chosen by measurement, on scenes
-that are not the 14 published ones (:mod:`..examples.validation`: living rooms, kitchens,
-offices and a garage with chairs, sofas, beds, benches, rails, pegs, taps, a motorbike-like
-frame...), with the judge (:mod:`.judge`, itself proven on :mod:`.labelled`) as the label:
+The paper tuned S_aff by hand per affordance. Here the whole acceptance (S_aff and the
+placement tests of :mod:`..clearance`: the clearance limit, the interior limit and the
+contact test) is chosen by measurement, on scenes that are not the 14 published ones
+(:mod:`..examples.validation`: living rooms, kitchens, offices and a garage with chairs,
+sofas, beds, benches, rails, pegs, taps, a motorbike-like frame...), with the judge
+(:mod:`.judge`, itself proven on :mod:`.labelled`) as the label:
 
 1. every example's descriptor is tried on every validation scene at two kinds of test
    points: every scene point within ``near_site`` (3 cm) of a site of any kind or of a fill
-   site's tap outlet (where the
-   valid places and the hardest negatives are), and a seeded random ``background`` fraction
-   (0.5 %) of the others; the paper's normal filter, every pair scored in full, and each
-   pair's clearance violations counted;
-2. judged: a stratified sample of the pairs (by 0.05 score band and by clearance violation
-   band, in each of the two kinds), each pair weighted by the inverse of its probability of
-   being drawn (Horvitz-Thompson: a background pair stands for 1 / 0.005 pairs of a dense
-   search, a near-site pair for one), and the top-5 poses at every clearance limit tried;
-3. for each threshold t and clearance limit v, the pair decisions (score >= t and at most a
-   fraction v of the clearance points violated) are compared with the judge: precision,
-   recall and F1, estimated with the sample weights, pooled over each affordance's examples
-   and scenes;
-4. (S_aff, V_aff) is the pair of largest F1 (ties: the stricter).
+   site's tap outlet (where the valid places and the hardest negatives are), and a seeded
+   random ``background`` fraction (0.5 %) of the others; the paper's normal filter, every
+   pair scored in full, and for every pair its clearance violations, its interior
+   violations and the fraction of each contact group touching at every distance of
+   :data:`CONTACT_DISTANCES`;
+2. judged: a stratified sample of the pairs (by 0.05 score band, by whether the pair passes
+   the most lenient placement tests tried, :data:`LENIENT`, and by kind of test point), each
+   pair weighted by the inverse of its probability of being drawn (Horvitz-Thompson: a
+   background pair stands for 1 / 0.005 pairs of a dense search, a near-site pair for one);
+3. for each threshold t and placement test (clearance limit, interior limit, contact mode,
+   distance and fraction: :data:`LIMITS`, :data:`INTERIOR_LIMITS`, :data:`CONTACT_OPTIONS`),
+   the pair decisions are compared with the judge: precision, recall and F1, estimated with
+   the sample weights, pooled over each affordance's examples and scenes;
+4. the acceptance of largest F1 is kept (ties: the stricter threshold, then the simpler
+   tests); then the top 5 of every (scene, example) under it are judged as well (reported,
+   not in the estimate).
 
 :func:`tune` runs it and :func:`write` keeps the raw judged pairs (CSV), the curves and the
 choice (JSON, Markdown), so that the choice can be checked and redone.
@@ -27,10 +32,8 @@ choice (JSON, Markdown), so that the choice can be checked and redone.
 
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import asdict, dataclass, field
-from pathlib import Path
 
 import numpy as np
 
@@ -41,7 +44,33 @@ THRESHOLDS = tuple(np.round(np.r_[np.arange(0.02, 0.30, 0.01), np.arange(0.30, 0
                             3))
 #: Clearance limits tried (fraction of the clearance points a placement may violate).
 LIMITS = (0.02, 0.05, 0.10, 0.20)
+#: Interior limits tried (fraction of the interior points; 1: no interior test).
+INTERIOR_LIMITS = (0.02, 0.05, 0.10, 1.0)
+#: Contact distances (m) and normal angles (degrees; 90: any normal) measured for every
+#: pair, and the fractions of a group tried.
+CONTACT_DISTANCES = (0.02, 0.05, 0.10, 0.25)
+CONTACT_ANGLES = (90.0, 30.0)
+CONTACT_FRACTIONS = (0.1, 0.25, 0.5, 0.75, 0.9)
+CONTACT_TESTS = tuple((d, a) for d in CONTACT_DISTANCES for a in CONTACT_ANGLES)
+#: Contact tests tried, (mode, distance, fraction, angle); ``off`` first.
+CONTACT_OPTIONS = (("off", CONTACT_DISTANCES[0], CONTACT_FRACTIONS[0], 90.0),) + tuple(
+    (mode, d, f, a) for mode in ("main", "all") for d, a in CONTACT_TESTS
+    for f in CONTACT_FRACTIONS)
+#: The most lenient placement tests tried: the stratification's second key.
+LENIENT = {"limit": max(LIMITS),
+           "interior_limit": max(v for v in INTERIOR_LIMITS if v < 1),
+           "contact": ("main", max(CONTACT_DISTANCES), min(CONTACT_FRACTIONS), 90.0)}
 
+
+def _contact_column(mode: str, distance: float, angle: float) -> str:
+    return f"contact_{mode}_{distance:g}_{angle:g}"
+
+
+#: Columns of a judged pair (``tuning_pairs.csv``).
+COLUMNS = (["scene", "example", "affordance", "pair", "near_site", "score", "violations",
+            "clearance_points", "interior_violations", "interior_points"]
+           + [_contact_column(m, d, a) for m in ("main", "all") for d, a in CONTACT_TESTS]
+           + ["weight", "top", "valid", "reasons"])
 
 
 @dataclass
@@ -54,7 +83,9 @@ class TuneSettings:
     spacing: float = 0.01
     near_site: float = 0.03
     background: float = 0.005
+    #: pairs judged per stratum: among the pairs passing the lenient tests, and the others
     per_band: int = 6
+    per_band_rest: int = 3
     top_k: int = 5
     seed: int = 0
 
@@ -63,18 +94,19 @@ class TuneSettings:
 class TuneResult:
     rows: list = field(default_factory=list)        # judged pairs
     runs: list = field(default_factory=list)        # per (scene, example) counts
-    curves: dict = field(default_factory=dict)      # affordance -> per (threshold, limit) rows
-    chosen: dict = field(default_factory=dict)      # affordance -> threshold, clearance limit
+    curves: dict = field(default_factory=dict)      # affordance -> best row per test
+    chosen: dict = field(default_factory=dict)      # affordance -> the acceptance
     settings: dict = field(default_factory=dict)
 
 
-def _sample(keys: np.ndarray, idx: np.ndarray, per_band: int, rng):
-    """Stratified sample of pairs ``idx`` by ``keys`` (their band): (chosen, weights)."""
+def _sample(keys: np.ndarray, idx: np.ndarray, per_band, rng):
+    """Stratified sample of pairs ``idx`` by ``keys`` (their stratum); ``per_band(key)`` pairs
+    per stratum: (chosen, weights)."""
     out, w = [], []
     for b in np.unique(keys):
         members = idx[keys == b]
-        pick = members if len(members) <= per_band else rng.choice(members, per_band,
-                                                                       replace=False)
+        n = per_band(b)
+        pick = members if len(members) <= n else rng.choice(members, n, replace=False)
         out.append(np.sort(pick))
         w.append(np.full(len(pick), len(members) / len(pick)))
     if not out:
@@ -82,22 +114,76 @@ def _sample(keys: np.ndarray, idx: np.ndarray, per_band: int, rng):
     return np.concatenate(out), np.concatenate(w)
 
 
-def _violation_band(v: np.ndarray, k: int) -> np.ndarray:
-    return np.searchsorted(np.asarray(LIMITS) * k, v, side="left")
+@dataclass
+class _Run:
+    """Every pair of one (scene, example): what the acceptance is decided from."""
+
+    scene: str
+    example: str
+    affordance: str
+    tensor: object
+    position: np.ndarray        # (P, 3) test points
+    orient: np.ndarray          # (P,) orientation indices
+    features: dict              # column name -> (P,) values (:data:`COLUMNS`)
+
+
+def _features(det, tensor, scene, grid) -> dict:
+    """The pair columns of :data:`COLUMNS` for every pair of a detection."""
+    from ..clearance import contact_fractions, interior_violations
+
+    pts = scene.points[det.pair_point]
+    orient = np.asarray(det.pair_orientation, np.int64)
+    n_o = det.settings.n_orientations
+    feats = {"score": det.pairs.score, "violations": det.clearance_violations.astype(np.int64),
+             "clearance_points": np.full(len(pts), len(tensor.clearance_points)),
+             "interior_violations": interior_violations(
+                 pts, orient, tensor, det.settings.interior_tolerance, n_o, scene, grid),
+             "interior_points": np.full(len(pts), len(tensor.interior_points))}
+    frac = contact_fractions(pts, orient, tensor, CONTACT_TESTS, n_o, scene, grid)
+    has = frac.shape[2] > 0
+    for j, (d, a) in enumerate(CONTACT_TESTS):
+        feats[_contact_column("main", d, a)] = frac[:, j, 0] if has else np.ones(len(pts))
+        feats[_contact_column("all", d, a)] = frac[:, j].min(axis=1) if has else np.ones(len(pts))
+    return feats
+
+
+def accepts(features: dict, threshold: float, limit: float, interior_limit: float,
+            contact: tuple) -> np.ndarray:
+    """(P,) bool: the pairs an acceptance takes, from their columns (``features``: column ->
+    array, or a list of row dicts' columns): score at least ``threshold``, at most ``limit``
+    of the clearance points and ``interior_limit`` of the interior points violated (1: no
+    interior test), and the contact test ``(mode, distance, fraction, angle)`` passed."""
+    f = features
+    ok = ((np.asarray(f["score"]) >= threshold - 1e-12)
+          & (np.asarray(f["violations"]) <= limit * np.asarray(f["clearance_points"])))
+    if interior_limit < 1:
+        ok &= (np.asarray(f["interior_violations"])
+               <= interior_limit * np.asarray(f["interior_points"]))
+    mode, d, frac, angle = contact
+    if mode != "off":
+        ok &= np.asarray(f[_contact_column(mode, d, angle)]) >= frac - 1e-9
+    return ok
+
+
+def _columns(rows: list) -> dict:
+    return {c: np.array([r[c] for r in rows]) for c in COLUMNS
+            if rows and c in rows[0] and c not in ("scene", "example", "affordance", "reasons")}
 
 
 def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
-    """Run the tuning (module docstring) and choose (S_aff, V_aff) per affordance."""
+    """Run the tuning (module docstring) and choose the acceptance of each affordance."""
     import interaction_tensor as it
-    from ..detect import detect, suppression_radius
+    from ..detect import detect
     from ..examples import interactions, validation
-    from ..predictions import top_k
+    from ..kernels import available as kernels_available
     from .judge import Judge, JudgeScene
 
     st = settings or TuneSettings()
     names = list(st.examples) or interactions.names()
     scenes = list(st.scenes) or validation.scene_names()
-    res = TuneResult(settings={**asdict(st), "limits": LIMITS})
+    res = TuneResult(settings={**asdict(st), "limits": LIMITS,
+                               "interior_limits": INTERIOR_LIMITS,
+                               "contact_options": [list(c) for c in CONTACT_OPTIONS]})
     t0 = time.perf_counter()
     models = {}
     for n in names:
@@ -106,9 +192,11 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
                                                         example=ex, tuned=False),
                      Judge.for_example(ex))
     rng = np.random.default_rng(st.seed)
+    keep = []
     for sname in scenes:
         vs = validation.build_scene(sname)
         scene = it.prepare_scene(vs.geometry, st.spacing, seed=st.seed)
+        grid = scene.grid() if kernels_available() else None
         jscene = JudgeScene(vs.geometry)
         kinds = vs.counts()
         # the sites, and above each fill site its tap outlet (filling's test points are there)
@@ -127,118 +215,199 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
             aff = ex.spec.affordance
             t1 = time.perf_counter()
             det = detect(scene, tensor, it.DetectSettings(
-                threshold=1e-9, clearance_max_violations=1.0, top_k=0, seed=st.seed,
-                neighbour_cache=True),
-                test_indices=test)
-            k = len(tensor.clearance_points)
-            score, viol = det.pairs.score, det.clearance_violations
-            pos = scene.points[det.pair_point]
+                threshold=1e-9, clearance_max_violations=1.0, contact=False, interior=False,
+                top_k=0, seed=st.seed, neighbour_cache=True), test_indices=test)
+            feats = _features(det, tensor, scene, grid)
             is_near = near[det.pair_point]
             weight = np.where(is_near, 1.0, len(others) / len(back))
-            radius = suppression_radius(tensor, det.settings)
-            tops = set()
-            allp = np.arange(len(score))
-            for lim in LIMITS:                                # the top 5 at every limit
-                ok = allp[viol <= lim * k]
-                tops |= set(ok[top_k(pos[ok], score[ok], st.top_k, radius)].tolist())
-            bands = (np.floor(score / 0.05).astype(int) * 100 + _violation_band(viol, k) * 10
-                     + is_near)
-            pick, frac = _sample(bands, allp, st.per_band, rng)
-            chosen = {int(i): float(w * weight[i]) for i, w in zip(pick, frac)}
-            for i in tops:
-                chosen.setdefault(i, 0.0)                    # judged, not in the estimate
-            for i, w in chosen.items():
+            lenient = accepts(feats, 0.0, **LENIENT)
+            keys = (np.floor(feats["score"] / 0.05).astype(int) * 100 + lenient * 10
+                    + is_near)
+            pick, frac = _sample(keys, np.arange(len(keys)),
+                                 lambda k: st.per_band if (k // 10) % 10 else st.per_band_rest,
+                                 rng)
+            for i, w in zip(pick, frac):
                 pose = tensor.pose(scene.points[det.pair_point[i]],
                                    2 * np.pi * det.pair_orientation[i] / det.settings.n_orientations)
                 v = judge.judge(jscene, pose)
                 res.rows.append({
                     "scene": sname, "example": n, "affordance": aff, "pair": int(i),
                     "near_site": bool(is_near[i]),
-                    "score": round(float(score[i]), 5), "violations": int(viol[i]),
-                    "clearance_points": k, "weight": round(w, 4), "top": i in tops,
+                    **{c: _value(feats[c][i]) for c in feats},
+                    "weight": round(float(w * weight[i]), 4), "top": False,
                     "valid": bool(v.valid), "reasons": "; ".join(v.reasons)})
+            keep.append(_Run(sname, n, aff, tensor, scene.points[det.pair_point],
+                             np.asarray(det.pair_orientation, np.int64), feats))
             res.runs.append({"scene": sname, "example": n, "affordance": aff,
                              "sites": int(kinds.get(SITE_OF[aff], 0)),
-                             "pairs": int(len(score)), "near_site_pairs": int(is_near.sum()),
+                             "pairs": int(len(keys)), "near_site_pairs": int(is_near.sum()),
                              "seconds": round(time.perf_counter() - t1, 2)})
-            judged = res.rows[-len(chosen):]
-            log(f"{sname:>15} {n:<16} pairs {len(score):>6} (near sites {int(is_near.sum()):>5}) "
-                f"judged {len(chosen):>4} (valid {sum(r['valid'] for r in judged):>3}) sites "
+            judged = res.rows[-len(pick):] if len(pick) else []
+            log(f"{sname:>15} {n:<16} pairs {len(keys):>6} (near sites {int(is_near.sum()):>5}) "
+                f"judged {len(pick):>4} (valid {sum(r['valid'] for r in judged):>3}) sites "
                 f"{kinds.get(SITE_OF[aff], 0)} {time.perf_counter() - t1:.0f} s")
     res.curves, res.chosen = choose(res.rows, res.runs)
+    _judge_tops(res, keep, models, st, log)
     res.settings["total_seconds"] = round(time.perf_counter() - t0, 1)
     return res
 
 
-def curve(rows: list, thresholds=THRESHOLDS, limit: float = 1.0) -> list:
-    """Per threshold: estimated precision, recall and F1 of the pair decisions (score >= t
-    and at most ``limit`` of the clearance points violated) against the judge."""
-    s = np.array([r["score"] for r in rows])
-    ok = np.array([r["violations"] <= limit * r["clearance_points"] for r in rows], bool)
-    w = np.array([r["weight"] for r in rows])
-    v = np.array([r["valid"] for r in rows], bool)
+def _value(v):
+    v = np.asarray(v).item()
+    return round(v, 5) if isinstance(v, float) else v
+
+
+def _judge_tops(res: TuneResult, runs: list, models: dict, st: TuneSettings, log) -> None:
+    """Judge the top ``st.top_k`` of every run under its affordance's chosen acceptance
+    (rows with ``top`` set and weight 0: reported, not in the estimate)."""
+    from ..detect import suppression_radius
+    from ..examples import validation
+    from ..predictions import top_k
+    from ..settings import DetectSettings
+    from .judge import JudgeScene
+
+    by_scene = {}
+    for r in runs:
+        by_scene.setdefault(r.scene, []).append(r)
+    for sname, rs in by_scene.items():
+        jscene = JudgeScene(validation.build_scene(sname).geometry)
+        for r in rs:
+            ch = res.chosen.get(r.affordance)
+            if ch is None:
+                continue
+            ok = np.flatnonzero(accepts(r.features, ch["threshold"], ch["clearance_limit"],
+                                        ch["interior_limit"], tuple(ch["contact"])))
+            radius = suppression_radius(r.tensor, DetectSettings())
+            tops = ok[top_k(r.position[ok], r.features["score"][ok], st.top_k, radius)]
+            _, _, judge = models[r.example]
+            for i in tops:
+                v = judge.judge(jscene, r.tensor.pose(r.position[i], 2 * np.pi * r.orient[i] / 8))
+                res.rows.append({
+                    "scene": sname, "example": r.example, "affordance": r.affordance,
+                    "pair": int(i), "near_site": None,
+                    **{c: _value(r.features[c][i]) for c in r.features},
+                    "weight": 0.0, "top": True, "valid": bool(v.valid),
+                    "reasons": "; ".join(v.reasons)})
+            log(f"{sname:>15} {r.example:<16} top {len(tops)} judged")
+
+
+def curve(rows, thresholds=THRESHOLDS, limit: float = 1.0, interior_limit: float = 1.0,
+          contact=CONTACT_OPTIONS[0]) -> list:
+    """Per threshold: estimated precision, recall and F1 of the pair decisions (:func:`accepts`)
+    against the judge, from judged ``rows`` (dicts, or the columns of :func:`_columns`).
+
+    Both are Horvitz-Thompson estimates over every pair. A rare valid pair drawn from a large
+    background stratum stands for thousands of pairs (hanging, 2026-11-25: one hanger at
+    score 0.07 for 93,606 of the 105,153 valid pairs), which holds every recall of that
+    affordance low; recall over the near-site pairs only was tried and chose far looser
+    acceptances (placing at S_aff 0.02, riding at 52 % precision), so the plain estimate
+    stays."""
+    f = rows if isinstance(rows, dict) else _columns(rows)
+    w, v = f["weight"].astype(float), f["valid"].astype(bool)
     total_valid = float((w * v).sum())
+    base = accepts(f, 0.0, limit, interior_limit, contact)
     out = []
     for t in thresholds:
-        acc = (s >= t - 1e-12) & ok
+        acc = base & (f["score"] >= t - 1e-12)
         tp = float((w * (acc & v)).sum())
         pp = float((w * acc).sum())
         prec = tp / pp if pp > 0 else float("nan")
         rec = tp / total_valid if total_valid > 0 else float("nan")
         f1 = 2 * prec * rec / (prec + rec) if pp > 0 and tp > 0 else 0.0
-        out.append({"threshold": float(t), "limit": float(limit), "precision": prec,
-                    "recall": rec, "f1": f1, "accepted_estimate": pp})
+        out.append({"threshold": float(t), "limit": float(limit),
+                    "interior_limit": float(interior_limit), "contact": list(contact),
+                    "precision": prec, "recall": rec, "f1": f1, "accepted_estimate": pp})
     return out
 
 
+def _strictness(row) -> tuple:
+    """Tie-break among equal F1: the higher threshold, then the lower clearance limit, then
+    no interior test before one, then no contact test before one (the simpler acceptance)."""
+    return (row["threshold"], -row["limit"], row["interior_limit"] >= 1,
+            row["contact"][0] == "off")
+
+
 def choose(rows: list, runs: list):
-    """Curves per affordance and clearance limit, and the chosen (S_aff, V_aff): largest F1,
-    ties to the stricter (higher threshold, then lower limit)."""
+    """Curves per affordance and the chosen acceptance: largest F1 over every threshold and
+    placement test tried (ties: :func:`_strictness`). ``curves[aff]`` holds, per placement
+    test, its best threshold's row, with the (scene, example) runs that have a site of the
+    affordance and a valid pair it accepts. Also returns, for comparison, the best
+    acceptance with the clearance test alone (``chosen[aff]["without_new_tests"]``)."""
     curves, chosen = {}, {}
     for aff in SITE_OF:
         rs = [r for r in rows if r["affordance"] == aff and r["weight"] > 0]
         if not rs:
             continue
-        with_sites = {(r["scene"], r["example"]) for r in runs
+        cols = _columns(rs)
+        run_of = np.array([f"{r['scene']}/{r['example']}" for r in rs])
+        with_sites = {f"{r['scene']}/{r['example']}" for r in runs
                       if r["affordance"] == aff and r["sites"] > 0}
-        c = []
+        best_rows = []
         for lim in LIMITS:
-            for row in curve(rs, limit=lim):
-                t = row["threshold"]
-                hit = {(r["scene"], r["example"]) for r in rows if r["affordance"] == aff
-                       and r["valid"] and r["score"] >= t - 1e-12
-                       and r["violations"] <= lim * r["clearance_points"]}
-                row["runs_with_sites"] = len(with_sites)
-                row["runs_with_a_valid_accepted"] = len(with_sites & hit)
-                c.append(row)
-        curves[aff] = c
-        best = max(c, key=lambda r: (r["f1"], r["threshold"], -r["limit"]))
-        chosen[aff] = {"threshold": best["threshold"], "clearance_limit": best["limit"]}
+            for ilim in INTERIOR_LIMITS:
+                for con in CONTACT_OPTIONS:
+                    c = curve(cols, limit=lim, interior_limit=ilim, contact=con)
+                    best = max(c, key=lambda r: (r["f1"], _strictness(r)))
+                    hit = set(run_of[accepts(cols, best["threshold"], lim, ilim, con)
+                                     & cols["valid"].astype(bool)].tolist())
+                    best["runs_with_sites"] = len(with_sites)
+                    best["runs_with_a_valid_accepted"] = len(with_sites & hit)
+                    best_rows.append(best)
+        curves[aff] = best_rows
+        top = max(best_rows, key=lambda r: (r["f1"], _strictness(r)))
+        old = max((r for r in best_rows if r["interior_limit"] >= 1
+                   and r["contact"][0] == "off"), key=lambda r: (r["f1"], _strictness(r)))
+        chosen[aff] = {"threshold": top["threshold"], "clearance_limit": top["limit"],
+                       "interior_limit": top["interior_limit"], "contact": top["contact"],
+                       "precision": top["precision"], "recall": top["recall"],
+                       "f1": top["f1"],
+                       "runs_with_a_valid_accepted": top["runs_with_a_valid_accepted"],
+                       "runs_with_sites": top["runs_with_sites"],
+                       "without_new_tests": {k: old[k] for k in (
+                           "threshold", "limit", "precision", "recall", "f1",
+                           "runs_with_a_valid_accepted")}}
     return curves, chosen
+
+
+def _pct(x) -> str:
+    return "-" if x is None or not np.isfinite(x) else f"{100 * x:.1f}"
 
 
 def write(res: TuneResult, out_dir) -> None:
     """``tuning_pairs.csv`` (every judged pair), ``tuning.json`` (runs, curves, choice) and
-    ``tuning.md`` (the chosen thresholds and their curves around them)."""
+    ``tuning.md`` (the chosen acceptance, and the best one without the new tests)."""
     from ..io import atomic_dir
     from .common import write_csv, write_json
 
     with atomic_dir(out_dir, "tuning.json") as out:
-        write_csv(out / "tuning_pairs.csv", res.rows,
-                  ["scene", "example", "affordance", "pair", "near_site", "score", "violations",
-                   "clearance_points", "weight", "top", "valid", "reasons"])
+        write_csv(out / "tuning_pairs.csv", res.rows, COLUMNS)
         write_json(out / "tuning.json", {"settings": res.settings, "chosen": res.chosen,
                                          "runs": res.runs, "curves": res.curves})
-        lines = ["# S_aff per affordance, tuned on the procedural validation scenes", "",
-                 "| affordance | S_aff | clearance limit | precision | recall | F1 | "
-                 "runs with a valid accepted pair |", "|---|---|---|---|---|---|---|"]
+        lines = ["# The acceptance of each affordance, tuned on the procedural validation "
+                 "scenes", "",
+                 "| affordance | S_aff | clearance limit | interior limit | contact test | "
+                 "precision | recall | F1 | runs with a valid accepted pair |",
+                 "|---|---|---|---|---|---|---|---|---|"]
         for aff, ch in res.chosen.items():
-            t, lim = ch["threshold"], ch["clearance_limit"]
-            row = next(r for r in res.curves[aff] if r["threshold"] == t and r["limit"] == lim)
-            lines.append(f"| {aff} | {t:.3f} | {lim:.2f} | {100 * row['precision']:.1f} | "
-                         f"{100 * row['recall']:.1f} | {100 * row['f1']:.1f} | "
-                         f"{row['runs_with_a_valid_accepted']}/{row['runs_with_sites']} |")
-        lines += ["", "Top-5 poses judged valid per (scene, example):", ""]
+            mode, d, f, a = ch["contact"]
+            contact = "off" if mode == "off" else (
+                f"{mode}, {100 * d:g} cm, {100 * f:g} %" + ("" if a >= 90 else f", {a:g} deg"))
+            inner = "off" if ch["interior_limit"] >= 1 else f"{ch['interior_limit']:.2f}"
+            lines.append(f"| {aff} | {ch['threshold']:.3f} | {ch['clearance_limit']:.2f} | "
+                         f"{inner} | {contact} | {_pct(ch['precision'])} | "
+                         f"{_pct(ch['recall'])} | {_pct(ch['f1'])} | "
+                         f"{ch['runs_with_a_valid_accepted']}/{ch['runs_with_sites']} |")
+        lines += ["", "The best acceptance with the clearance test alone (no interior or "
+                      "contact test), from the same judged pairs:", "",
+                  "| affordance | S_aff | clearance limit | precision | recall | F1 | "
+                  "runs with a valid accepted pair |", "|---|---|---|---|---|---|---|"]
+        for aff, ch in res.chosen.items():
+            o = ch["without_new_tests"]
+            lines.append(f"| {aff} | {o['threshold']:.3f} | {o['limit']:.2f} | "
+                         f"{_pct(o['precision'])} | {_pct(o['recall'])} | {_pct(o['f1'])} | "
+                         f"{o['runs_with_a_valid_accepted']}/{ch['runs_with_sites']} |")
+        lines += ["", "Top-5 poses judged valid per (scene, example), under the chosen "
+                      "acceptance:", ""]
         for r in res.runs:
             tops = [x for x in res.rows if x["scene"] == r["scene"]
                     and x["example"] == r["example"] and x["top"]]

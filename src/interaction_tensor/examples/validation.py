@@ -204,20 +204,51 @@ def _garage():
     return _shell((5.4, 4.6)), pieces
 
 
+def _judge_traps():
+    """Not a validation room (the tuning never sees it): surfaces that fooled an earlier
+    filling judge, a narrow bar a few centimetres over a mug that is not in a basin. A
+    trestle table whose stretcher runs 16 cm above the floor, and a counter with a towel bar
+    20 cm above its top, 10 cm in from its front edge. :data:`JUDGE_TRAPS` lists where a mug stands under each bar."""
+    k = F._Kit()
+    k.box((-0.6, -0.3, 0.71), (0.6, 0.3, 0.74))                      # table top
+    for x in (-0.5, 0.5):
+        k.box((x - 0.03, -0.25, 0.0), (x + 0.03, 0.25, 0.71))        # trestle legs
+    k.box((-0.5, -0.02, 0.16), (0.5, 0.02, 0.19))                    # the stretcher
+    table = k.piece("trestle table", (1.3, 1.2), 0)
+    k = F._Kit()
+    k.box((-0.6, -0.3, 0.0), (0.6, 0.3, 0.9))                        # counter block
+    for x in (-0.5, 0.5):
+        k.box((x - 0.01, -0.21, 0.9), (x + 0.01, -0.19, 1.1))        # bar posts
+    k.add(F.rod((-0.5, -0.2, 1.1), (0.5, -0.2, 1.1), 0.012, sections=16))
+    counter = k.piece("counter with towel bar", (1.3, 2.6), 0)
+    return _shell((3.0, 3.4)), [table, counter]
+
+
+#: Judge traps (:func:`_judge_traps`): (support point under the bar, note).
+JUDGE_TRAPS = [((1.3 + x, 1.2, 0.0), f"floor under the stretcher, x {x:+.1f}")
+               for x in (-0.3, 0.0, 0.25)] + \
+              [((1.3 + x, 2.6 - 0.2, 0.9), f"counter under the towel bar, x {x:+.1f}")
+               for x in (-0.3, 0.0, 0.25)]
+
 _SCENES = {"living_a": _living_a, "living_b": _living_b, "kitchen_a": _kitchen_a,
            "kitchen_b": _kitchen_b, "office_a": _office_a, "office_nofloor": _office_nofloor,
            "garage": _garage}
+#: Scenes for proving the judge only, never for tuning.
+_JUDGE_ONLY = {"judge_traps": _judge_traps}
 
 
 def scene_names() -> list[str]:
+    """The validation rooms (tuning and the labelled set); not the judge-only scenes."""
     return list(_SCENES)
 
 
 def build_scene(name: str) -> ValidationScene:
-    """The validation scene ``name`` (deterministic)."""
-    if name not in _SCENES:
-        raise KeyError(f"unknown validation scene {name!r}; known: {', '.join(_SCENES)}")
-    shell, pieces = _SCENES[name]()
+    """The validation scene ``name`` (deterministic), or a judge-only scene."""
+    make = _SCENES.get(name) or _JUDGE_ONLY.get(name)
+    if make is None:
+        raise KeyError(f"unknown validation scene {name!r}; known: "
+                       f"{', '.join(list(_SCENES) + list(_JUDGE_ONLY))}")
+    shell, pieces = make()
     return compose(name, pieces, shell)
 
 
