@@ -95,6 +95,24 @@ def test_rank_pairs_is_the_exact_best_and_worst_by_full_score(bowl):
     assert worst.tolist() == top_k(pos, -full, 5, 0.15)
 
 
+def test_rank_pairs_finds_the_best_rejected_pairs_when_nothing_is_accepted(bowl):
+    """Every pair rejected: all bounds equal the threshold, so only the partial scores say
+    which pairs to score again first; a fifth of them scored finds the exact best."""
+    from interaction_tensor.examples import demo
+
+    room = it.prepare_scene(demo.build().scene, 0.02, seed=0)
+    det = it.detect(room, bowl, it.DetectSettings(sample_fraction=0.02, threshold=0.95))
+    n = len(det.pairs.score)
+    assert not det.pairs.accepted.any() and n > 1000
+    full, ok = full_scores(det, np.arange(n))
+    pos = room.points[det.pair_point]
+    exact = top_k(pos, np.where(ok, 2.0, 0.0) + full, 5, 0.15)
+    assert max(exact) >= n // 5          # not among the first fifth in pair order
+    best, best_s, _ = rank_pairs(det, 5, 0.15, block=64, max_evaluations=n // 5)
+    assert best.tolist() == exact
+    assert np.allclose(best_s, full[exact])
+
+
 def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
     from interaction_tensor.evaluation.tuning import COLUMNS
 
@@ -141,15 +159,22 @@ def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["tuning"]
 
 
-def test_train_with_a_tuned_acceptance_and_detect_without_clearance(tmp_path):
+@pytest.fixture
+def corner_files(tmp_path):
+    """The corner example written as q.ply (the box) and s.ply (floor and walls)."""
+    from interaction_tensor.io import write_mesh
+
+    q, s = corner_example()
+    write_mesh(tmp_path / "q.ply", q.vertices, q.faces)
+    write_mesh(tmp_path / "s.ply", s.vertices, s.faces)
+    return tmp_path
+
+
+def test_train_with_a_tuned_acceptance_and_detect_without_clearance(corner_files):
     from interaction_tensor.cli import main
     from interaction_tensor.examples.interactions import ACCEPTANCE
 
-    q, s = corner_example()
-    from interaction_tensor.io import write_mesh
-
-    write_mesh(tmp_path / "q.ply", q.vertices, q.faces)
-    write_mesh(tmp_path / "s.ply", s.vertices, s.faces)
+    tmp_path = corner_files
     out = tmp_path / "t.npz"
     assert main(["train", str(tmp_path / "q.ply"), str(tmp_path / "s.ply"), "--affordance",
                  "box", "-o", str(out), "--acceptance", "placing", "-q"]) == 0
@@ -166,3 +191,30 @@ def test_train_with_a_tuned_acceptance_and_detect_without_clearance(tmp_path):
 
     stats = json.loads((tmp_path / "d" / "predictions.json").read_text())["stats"]
     assert stats["pairs_failing_clearance"] == 0
+    # every placement test off: the score alone decides
+    assert main(["detect", str(tmp_path / "s.ply"), str(out), "-o", str(tmp_path / "e"),
+                 "--no-clearance", "--no-contact", "--no-interior", "--sample-fraction", "0.2",
+                 "-q"]) == 0
+    stats = json.loads((tmp_path / "e" / "predictions.json").read_text())["stats"]
+    assert stats["pairs_failing_contact"] == stats["pairs_failing_interior"] == 0
+    assert stats["pairs_accepted"] == stats["pairs_accepted_by_score"]
+
+
+def test_train_with_a_ground_and_refuse_one_above_the_query(corner_files, capsys):
+    from interaction_tensor.cli import main
+
+    tmp_path = corner_files
+    out = tmp_path / "t.npz"
+    # the box stands on z = 0: with the ground there, its bottom's clearance is nil
+    assert main(["train", str(tmp_path / "q.ply"), str(tmp_path / "s.ply"), "--affordance",
+                 "box", "-o", str(out), "--ground", "0", "-q"]) == 0
+    t = it.InteractionTensor.load(out)
+    assert t.ground == 0.0
+    bottom = t.clearance_points[:, 2] < 0.002
+    assert bottom.any() and (t.clearance_radius[bottom] < 0.0025).all()
+    capsys.readouterr()
+    assert main(["train", str(tmp_path / "q.ply"), str(tmp_path / "s.ply"), "--affordance",
+                 "box", "-o", str(tmp_path / "u.npz"), "--ground", "0.05", "-q"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "ground" in err[0] and "lowest point" in err[0], err
+    assert not (tmp_path / "u.npz").exists()

@@ -569,7 +569,9 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     score. Worst: by full score alone (lowest first). Rejected pairs kept only a partial score; their full score lies between it
     and ``score + rest[decided_at]``, so pairs are scored fully in the order of those bounds
     until no unscored pair can enter the k (branch and bound: exact, up to
-    ``max_evaluations`` pairs scored again).
+    ``max_evaluations`` pairs scored again; past that, the best of the pairs scored, which
+    are those of the highest bounds and, among equal bounds, of the highest partial
+    scores).
 
     Returns (indices into the pair arrays (<= k,), full scores, clearance_ok), best first
     (worst first when ``worst``).
@@ -583,10 +585,13 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     done = det.score_accepted if det.score_accepted is not None else det.pairs.accepted
     rest = det.rest if det.rest is not None else keypoint_table(det.tensor, det.settings).rest
     upper = np.where(done, score, score + rest[det.pairs.decided_at])
-    # optimistic key of a pair not scored yet: the key is (2 if clearance ok) + full score for
-    # the best, -full score for the worst
+    # optimistic key of a pair not scored yet: the key is (2 if it passes the placement
+    # tests) + full score for the best, -full score for the worst. Pairs of equal bound are
+    # scored best partial score first (for the worst, lowest): a run that accepted nothing
+    # rejected every pair where its bound fell just below the threshold, so the bounds of
+    # all its pairs are equal and only the partial scores tell the promising ones
     bound = -score if worst else upper + 2.0
-    order = np.argsort(-bound, kind="stable")
+    order = np.lexsort((score if worst else -score, -bound))
     key = np.full(n, np.nan)
     full = np.full(n, np.nan)
     okv = np.zeros(n, bool)
