@@ -202,7 +202,8 @@ def register(sub) -> None:
                         "(default: none, all settings must agree)")
     p.add_argument("--replace", action="store_true",
                    help="the runs may share scenes: a later run's results for a (scene, "
-                        "method) it ran replace the earlier runs' (a method evaluated again, "
-                        "e.g. after new tuning; their methods are listed under per_part)")
+                        "example, method) it ran replace the earlier runs' (a method or some "
+                        "examples evaluated again, e.g. after new tuning; their methods and "
+                        "examples are listed under per_part)")
     quiet_option(p)
     p.set_defaults(func=cmd_evaluate_merge)

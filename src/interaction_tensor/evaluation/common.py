@@ -45,8 +45,15 @@ def write_csv(path: Path, rows: list[dict], columns: list[str]) -> None:
         w = csv.DictWriter(fh, columns, extrasaction="ignore")
         w.writeheader()
         for r in rows:
-            w.writerow({k: (f"{r[k]:.2f}" if isinstance(r.get(k), float) else r.get(k))
+            w.writerow({k: (_number(r[k]) if isinstance(r.get(k), float) else r.get(k))
                         for k in columns})
+
+
+def _number(v: float) -> str:
+    """A float for a CSV: to 5 decimals, no trailing zeros (read back, a tuning's pairs must
+    decide as they did: 2 decimals moved placing's chosen S_aff from 0.23 to 0.25)."""
+    text = f"{v:.5f}".rstrip("0").rstrip(".")
+    return "0" if text in ("", "-0") else text
 
 
 def write_json(path: Path, obj) -> None:

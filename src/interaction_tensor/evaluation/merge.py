@@ -114,18 +114,20 @@ def load_run(directory) -> "EvalResult":
                       timings=timings, settings=settings)
 
 
-def _replace_methods(parts: list) -> None:
-    """In place: each part's records of a (scene, method) it ran drop those of earlier
-    parts (the judgements, runs, sampling rows and timings of that scene and method)."""
+def _replace_runs(parts: list) -> None:
+    """In place: each part's records of a (scene, example, method) it ran drop those of
+    earlier parts (the judgements, runs, sampling rows and timings of that run)."""
+    def key(r, method=None):
+        return r.get("scene"), r.get("example"), method or r.get("method")
+
     for i, later in enumerate(parts):
-        done = {(r["scene"], r["method"]) for r in later.runs}
+        done = {key(r) for r in later.runs}
         for earlier in parts[:i]:
             for name in ("judgements", "runs", "timings"):
-                rows = getattr(earlier, name)
-                setattr(earlier, name, [r for r in rows
-                                        if (r.get("scene"), r.get("method")) not in done])
+                setattr(earlier, name, [r for r in getattr(earlier, name)
+                                        if key(r) not in done])
             earlier.sampling = [r for r in earlier.sampling
-                                if (r["scene"], "iT-" + r["keypoints"]) not in done]
+                                if key(r, "iT-" + r["keypoints"]) not in done]
 
 
 def merge(directories, out_dir, log=print, allow=(), replace: bool = False) -> "EvalResult":
@@ -135,10 +137,10 @@ def merge(directories, out_dir, log=print, allow=(), replace: bool = False) -> "
     ran where Open3D could not load); the merged ``run.json`` then lists each part's value
     of them under ``per_part``, so that no table hides the difference.
 
-    ``replace``: the parts may share scenes; a later part's results for a (scene, method)
-    it ran replace the earlier parts' (a method run again with new settings on the same
-    scenes; the parts' ``methods`` may then differ and are listed under ``per_part``, as
-    is every key of ``allow``)."""
+    ``replace``: the parts may share scenes; a later part's results for a (scene, example,
+    method) it ran replace the earlier parts' (a method or some examples run again with new
+    settings on the same scenes; the parts' ``methods`` and ``examples`` may then differ and
+    are listed under ``per_part``, as is every key of ``allow``)."""
     from .report import write_all
     from .runner import METHODS, EvalResult, metrics
 
@@ -146,7 +148,8 @@ def merge(directories, out_dir, log=print, allow=(), replace: bool = False) -> "
     if len(dirs) < 2:
         raise InputError(None, "give at least two evaluation directories to merge")
     parts = [load_run(d) for d in dirs]
-    allow = tuple(allow) + (("methods",) if replace and "methods" not in allow else ())
+    if replace:
+        allow = tuple(allow) + tuple(k for k in ("methods", "examples") if k not in allow)
     skip = _PER_PART | {"per_part"} | set(allow)
     base = {k: v for k, v in parts[0].settings.items() if k not in skip}
     seen: dict[str, Path] = {}
@@ -161,7 +164,7 @@ def merge(directories, out_dir, log=print, allow=(), replace: bool = False) -> "
                                     "later run replace the methods it ran)")
             seen[s] = d
     if replace:
-        _replace_methods(parts)
+        _replace_runs(parts)
     res = EvalResult(settings={**parts[0].settings,
                                "scenes": list(dict.fromkeys(
                                    s for p in parts for s in p.settings["scenes"])),
@@ -195,6 +198,7 @@ def merge(directories, out_dir, log=print, allow=(), replace: bool = False) -> "
     methods = tuple(m for m in METHODS if m in ran)
     if replace:
         res.settings["methods"] = list(methods)
+        res.settings["examples"] = sorted({r["example"] for r in res.runs})
     res.table = metrics(res.judgements, methods, res.runs)
 
     from ..io import atomic_dir

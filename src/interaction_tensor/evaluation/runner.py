@@ -7,13 +7,14 @@ Protocol (after the paper's human-marker protocol, section 4.2):
   same candidates: the paper's seeded random 30 % of the scene points (``sample_fraction``;
   ``test_points`` instead draws a fixed number), kept when their normal line is within 15
   degrees of N_aff. iT scores every candidate, with the example's S_aff (tuned per affordance
-  on the procedural validation scenes, :mod:`.tuning`) and the clearance test. Naive and BS,
+  on the procedural validation scenes, :mod:`.tuning`) and the placement tests (clearance,
+  contact, interior: :mod:`..clearance`). Naive and BS,
   whose ICP per pair is 100 x slower, score a seeded random subset of ``max_candidates``
   (Naive, 64) and ``max_bs_candidates`` (BS, 12) of the same candidates, in all 8
   orientations, seeing the scene at the density they were calibrated at.
 * **Top 5**: the 5 best pairs after spatial non-maximum suppression (radius d_o / 2): accepted
   pairs first (a method that accepts fewer than 5 still shows its 5 best); for iT, pairs
-  passing the clearance test before those failing it, then by full score (rejected pairs are
+  passing the placement tests before those failing them, then by full score (rejected pairs are
   scored again in full, :func:`..detect.rank_pairs`, exactly). **Bottom 5**: the 5 worst by
   full score, with the same suppression.
 * The judge (:mod:`.judge`, proven on the labelled set of :mod:`.labelled`, whose accuracy is
