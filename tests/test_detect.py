@@ -105,6 +105,35 @@ def test_grid_nearest_neighbour_is_exact():
     np.testing.assert_allclose(d_got, d_ref, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("cell", [0.02, 0.05, 0.13])
+def test_far_queries_search_occupied_blocks_exactly(cell):
+    """A floor, a thin pole and a small box with metres of empty space between them: queries
+    far from every sample (the block search of :func:`nearest`), near ones (the shell
+    search), outside the grid, on samples and on cell faces find the cKDTree's nearest."""
+    from scipy.spatial import cKDTree
+
+    from interaction_tensor.kernels import FAR_BLOCK, FAR_CELLS
+    rng = np.random.default_rng(7)
+    pts = np.r_[rng.random((3000, 3)) * [2, 2, 0],
+                rng.random((300, 3)) * [0.01, 0.01, 1.5] + [1.7, 0.2, 0],
+                rng.random((500, 3)) * [0.2, 0.2, 0.2] + [0.3, 1.5, 1.2]]
+    grid = build_grid(pts, np.zeros_like(pts), cell)
+    q = np.r_[rng.random((4000, 3)) * [4, 4, 4] - [1, 1, 1],
+              pts[rng.choice(len(pts), 200)],
+              grid.origin + np.round(rng.random((500, 3)) * grid.dims) * grid.cell]
+    d_ref, ref = cKDTree(pts).query(q)
+    assert (d_ref > FAR_CELLS * grid.cell).mean() > 0.3 and (d_ref < grid.cell).any()
+    got = nearest_indices(grid, q)
+    np.testing.assert_allclose(np.linalg.norm(pts[got] - q, axis=1), d_ref, rtol=0, atol=1e-12)
+    # the block table: 1 exactly where a block of FAR_BLOCK^3 cells holds a sample
+    blocks = -(-grid.dims // FAR_BLOCK)
+    ijk = np.minimum(((grid.points - grid.origin) / grid.cell).astype(int), grid.dims - 1)
+    bijk = ijk // FAR_BLOCK
+    expect = np.zeros(int(np.prod(blocks)), np.int8)
+    expect[(bijk[:, 0] * blocks[1] + bijk[:, 1]) * blocks[2] + bijk[:, 2]] = 1
+    np.testing.assert_array_equal(grid.occ, expect)
+
+
 @pytest.mark.parametrize("shuffled", [False, True])
 def test_grid_tables_are_exact_and_own_their_memory(shuffled):
     """Cell starts cover each cell's points; each cell's seed is a non-empty cell at the

@@ -3,7 +3,9 @@
 Two exact nearest-neighbour searches feed the same per-keypoint arithmetic (:func:`_term`):
 
 * :func:`nearest`: shell search on the uniform grid of :class:`kernels.Grid` (any query, no
-  set-up; about 0.2 us near the surface, several us far from it);
+  set-up; about 0.2 us near the surface); a query more than ``FAR_CELLS`` cells from its
+  seed sample searches the occupied blocks of ``FAR_BLOCK``^3 cells instead
+  (:func:`_nearest_far`), where the shells would visit every empty cell of the ball;
 * the neighbour cache (:func:`_leaf`, :func:`_scan_list`; used by :func:`score_cached`):
   octrees over root blocks of the queried space whose leaves hold every scene sample that
   can be the nearest one to some point of the leaf's box (the samples whose Voronoi cell
@@ -13,9 +15,9 @@ Two exact nearest-neighbour searches feed the same per-keypoint arithmetic (:fun
   until its block is built a query uses :func:`nearest`, so every answer is exact.
 
 Ties: both searches return, among samples at the same computed squared distance, the one
-scanned first; the shell search scans its seed cell first and then by cell, the lists are in
-sorted-point order, so the two agree except for exact distance ties between samples of
-different grid cells (none in the shared scenes; see benchmarks/kernel_speed.py).
+scanned first; the shell and block searches scan the seed cell first and then by cell, the
+lists are in sorted-point order, so they agree except for exact distance ties between
+samples of different grid cells (none in the shared scenes; see benchmarks/kernel_speed.py).
 """
 
 import math
@@ -23,7 +25,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from .kernels import PAGE, PAGE_BITS
+from .kernels import FAR_BLOCK, FAR_CELLS, PAGE, PAGE_BITS
 
 
 @njit(cache=True, inline="always")
@@ -50,8 +52,80 @@ def _scan_cell(qx, qy, qz, pts, lo, hi, best, besti):
     return best, besti
 
 
+@njit(cache=True, inline="always")
+def _box_gap(q, lo, hi):
+    """Distance from coordinate ``q`` to the interval [lo, hi] (0 inside)."""
+    if q < lo:
+        return lo - q
+    if q > hi:
+        return q - hi
+    return 0.0
+
+
+@njit(cache=True, fastmath=False)
+def _nearest_far(qx, qy, qz, pts, starts, occ, ox, oy, oz, cell, nx, ny, nz, best, besti):
+    """:func:`nearest` for a query far from every sample (its seed sample ``besti``, at
+    squared distance ``best``, more than :data:`FAR_CELLS` cells away): visits the blocks of
+    ``FAR_BLOCK``^3 cells (``occ``: 1 where a block holds a sample) that meet the ball of
+    radius sqrt(best), and in the occupied ones the cells that meet it, each block or cell
+    skipped when its box is farther than the best sample so far. A shell search of the
+    same ball visits every one of its (radius / cell)^3 cells, empty or not.
+
+    Boxes are compared with ``best`` enlarged by 1e-9 of itself, so that a sample on a box
+    face is never missed by rounding; samples are taken when strictly closer, as in
+    :func:`nearest` (the seed first, then by block and cell)."""
+    B = FAR_BLOCK
+    mby = (ny + B - 1) // B
+    mbz = (nz + B - 1) // B
+    bw = cell * B
+    r = math.sqrt(best) * (1.0 + 1e-9) + 1e-12
+    i0 = max(int(math.floor((qx - r - ox) / bw)), 0)
+    i1 = min(int(math.floor((qx + r - ox) / bw)), (nx + B - 1) // B - 1)
+    j0 = max(int(math.floor((qy - r - oy) / bw)), 0)
+    j1 = min(int(math.floor((qy + r - oy) / bw)), mby - 1)
+    k0 = max(int(math.floor((qz - r - oz) / bw)), 0)
+    k1 = min(int(math.floor((qz + r - oz) / bw)), mbz - 1)
+    for bi in range(i0, i1 + 1):
+        gx = _box_gap(qx, ox + bi * bw, ox + (bi + 1) * bw)
+        gx2 = gx * gx
+        if gx2 > best * (1.0 + 1e-9):
+            continue
+        for bj in range(j0, j1 + 1):
+            gy = _box_gap(qy, oy + bj * bw, oy + (bj + 1) * bw)
+            gxy = gx2 + gy * gy
+            if gxy > best * (1.0 + 1e-9):
+                continue
+            for bk in range(k0, k1 + 1):
+                if occ[(bi * mby + bj) * mbz + bk] == 0:
+                    continue
+                gz = _box_gap(qz, oz + bk * bw, oz + (bk + 1) * bw)
+                if gxy + gz * gz > best * (1.0 + 1e-9):
+                    continue
+                for i in range(bi * B, min(bi * B + B, nx)):
+                    hx = _box_gap(qx, ox + i * cell, ox + (i + 1) * cell)
+                    hx2 = hx * hx
+                    if hx2 > best * (1.0 + 1e-9):
+                        continue
+                    for j in range(bj * B, min(bj * B + B, ny)):
+                        hy = _box_gap(qy, oy + j * cell, oy + (j + 1) * cell)
+                        hxy = hx2 + hy * hy
+                        if hxy > best * (1.0 + 1e-9):
+                            continue
+                        base = (i * ny + j) * nz
+                        for k in range(bk * B, min(bk * B + B, nz)):
+                            c = base + k
+                            if starts[c] == starts[c + 1]:
+                                continue
+                            hz = _box_gap(qz, oz + k * cell, oz + (k + 1) * cell)
+                            if hxy + hz * hz > best * (1.0 + 1e-9):
+                                continue
+                            best, besti = _scan_cell(qx, qy, qz, pts, starts[c],
+                                                     starts[c + 1], best, besti)
+    return besti
+
+
 @njit(cache=True, fastmath=False, inline="always")
-def nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz):
+def nearest(qx, qy, qz, pts, starts, seed, occ, ox, oy, oz, cell, nx, ny, nz):
     """Index (into the sorted points) of the exact nearest point to q.
 
     Starts from the points of the non-empty cell nearest to q's cell (``seed``, a distance
@@ -79,6 +153,16 @@ def nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz):
     if out == 0:
         sc = seed[(ci * ny + cj) * nz + ck]
         best, besti = _scan_cell(qx, qy, qz, pts, starts[sc], starts[sc + 1], best, besti)
+    else:                           # outside the grid: the seed of the nearest grid cell
+        sf = seed[(min(max(ci, 0), nx - 1) * ny + min(max(cj, 0), ny - 1)) * nz
+                  + min(max(ck, 0), nz - 1)]
+        far, fi = _scan_cell(qx, qy, qz, pts, starts[sf], starts[sf + 1], np.inf, -1)
+        if far > FAR_CELLS * FAR_CELLS * c2:
+            return _nearest_far(qx, qy, qz, pts, starts, occ, ox, oy, oz, cell, nx, ny, nz,
+                                far, fi)
+    if best > FAR_CELLS * FAR_CELLS * c2 and besti >= 0:
+        return _nearest_far(qx, qy, qz, pts, starts, occ, ox, oy, oz, cell, nx, ny, nz, best,
+                            besti)
     bc = best / c2                  # best squared distance in cell units
     smax = max(nx, ny, nz) + out + 1
     for s in range(smax + 1):
@@ -183,7 +267,8 @@ def _decision(s, k, rest, threshold, eps):
 @njit(cache=True, parallel=True, fastmath=False)
 def score(tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, max_terms, rest,
           criterion, c, a, wsum, threshold, early_exit, surface, rho,
-          pts, nrm, starts, seed, origin, cell, dims, out_score, out_acc, out_at, out_cmp):
+          pts, nrm, starts, seed, origin, cell, dims, occ, out_score, out_acc, out_at,
+          out_cmp):
     """Score pairs with the grid shell search for every keypoint (no set-up; the reference
     of :func:`score_cached`). Pair i: test point ``tp[i]`` (m), orientation ``orient[i]``;
     outputs per pair: score, accepted, decided_at, comparisons."""
@@ -203,7 +288,7 @@ def score(tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, max_terms, 
             qx = tp[i, 0] + offsets[o, k, 0]
             qy = tp[i, 1] + offsets[o, k, 1]
             qz = tp[i, 2] + offsets[o, k, 2]
-            p = nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz)
+            p = nearest(qx, qy, qz, pts, starts, seed, occ, ox, oy, oz, cell, nx, ny, nz)
             s += _term(qx, qy, qz, p, k, o, pts, nrm, prov, pnorm, weights, cos_lim, big_w,
                        criterion, c, a, wsum, nk, surface, rho)
             done += 1
@@ -426,9 +511,9 @@ def _gather(lx, ly, lz, h, r, sep, lattice, tol, pts, starts, occ, cb, ox, oy, o
 
 
 @njit(cache=True)
-def _nearest_call(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz):
+def _nearest_call(qx, qy, qz, pts, starts, seed, occ, ox, oy, oz, cell, nx, ny, nz):
     """:func:`nearest` as a real call: keeps the rare fallback out of the hot loop's code."""
-    return nearest(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz)
+    return nearest(qx, qy, qz, pts, starts, seed, occ, ox, oy, oz, cell, nx, ny, nz)
 
 
 @njit(cache=True, inline="always")
@@ -515,7 +600,7 @@ LOOKAHEAD = 8
 @njit(cache=True, parallel=True, fastmath=False)
 def score_cached(perm, tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, rest,
                  criterion, c, a, wsum, threshold, early_exit, surface, rho,
-                 pts, nrm, starts, seed, origin, cell, dims,
+                 pts, nrm, starts, seed, origin, cell, dims, occ,
                  ptab, pdims, pool, bo, hb, bdims, child, lstart, llen, lists, scan_max,
                  req, nreq, out_score, out_acc, out_at, out_cmp):
     """Score pairs ``perm`` (indices into tp / orient / outputs) with the neighbour cache.
@@ -555,7 +640,7 @@ def score_cached(perm, tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w
                 if n >= 0 and llen[n] <= scan_max:
                     p = _scan_list(qx, qy, qz, lists, lstart[n], llen[n], pts)
                 else:
-                    p = _nearest_call(qx, qy, qz, pts, starts, seed, ox, oy, oz, cell, nx, ny,
+                    p = _nearest_call(qx, qy, qz, pts, starts, seed, occ, ox, oy, oz, cell, nx, ny,
                                       nz)
                     if n <= -2 and nr < cap:
                         rq = -n - 2
@@ -742,7 +827,7 @@ def build_roots(blocks, bo, hb, bdims, lattice, tol, slack, leaf_size, max_depth
         cx = lx + 0.5 * hb
         cy = ly + 0.5 * hb
         cz = lz + 0.5 * hb
-        nc = nearest(cx, cy, cz, pts, starts, seed, ox, oy, oz, cell, nx, ny, nz)
+        nc = nearest(cx, cy, cz, pts, starts, seed, occ, ox, oy, oz, cell, nx, ny, nz)
         dx = pts[nc, 0] - cx
         dy = pts[nc, 1] - cy
         dz = pts[nc, 2] - cz
@@ -820,9 +905,9 @@ def morton_order(q, lo, step):
 
 
 @njit(cache=True, parallel=True)
-def nearest_many(q, pts, starts, seed, origin, cell, dims, out):
+def nearest_many(q, pts, starts, seed, occ, origin, cell, dims, out):
     for i in prange(q.shape[0]):
-        out[i] = nearest(q[i, 0], q[i, 1], q[i, 2], pts, starts, seed, origin[0], origin[1],
+        out[i] = nearest(q[i, 0], q[i, 1], q[i, 2], pts, starts, seed, occ, origin[0], origin[1],
                          origin[2], cell, dims[0], dims[1], dims[2])
 
 

@@ -22,6 +22,15 @@ import numpy as np
 from .scoring import paper_limits
 
 _KERNELS = None
+
+#: Block edge, in grid cells, of the grid's block occupancy (:attr:`Grid.occ`; also the
+#: cache builder's, :data:`CACHE_OCC_CELLS`). Compiled into the Numba kernels.
+FAR_BLOCK = 4
+#: A nearest-neighbour query whose seed sample is farther than this (grid cells) searches
+#: the occupied blocks of :attr:`Grid.occ` instead of every cell of the shells around it: a
+#: seated person's head, 1 m above a desk frame of 6 cm cells, visited ~20,000 empty cells
+#: per query (benchmarks/kernel_speed.py). Compiled into the Numba kernels.
+FAR_CELLS = 3.0
 #: Largest number of grid cells (dense start table, 8 bytes each).
 MAX_CELLS = 20_000_000
 #: Pairs per work unit handed to a thread by the scoring kernel.
@@ -43,7 +52,7 @@ CACHE_LEAF_SIZE = 16
 #: Leaf lists longer than this are not scanned: the query uses the grid search.
 CACHE_SCAN_MAX = 256
 #: Blocks of grid cells (per axis) whose emptiness the cache builder checks at once.
-CACHE_OCC_CELLS = 4
+CACHE_OCC_CELLS = FAR_BLOCK
 #: Separators of a box: candidates nearest to a (n + 1)^3 lattice over it.
 CACHE_LATTICE = 2
 #: Memory of one cache (bytes); past it the oldest trees are dropped (or all of them) and
@@ -104,6 +113,8 @@ class Grid:
     origin : (3,) float64, corner of cell (0, 0, 0)
     cell : float, cell edge (m)
     dims : (3,) int64 cells per axis
+    occ : (ceil(nx / FAR_BLOCK) * ceil(ny / FAR_BLOCK) * ceil(nz / FAR_BLOCK),) int8, 1 where
+        a block of FAR_BLOCK^3 cells holds a point (the far queries' search, :func:`nearest`)
     cache : the :class:`NeighbourCache` of :func:`score_jobs` (None until first used)
     """
 
@@ -115,6 +126,7 @@ class Grid:
     origin: np.ndarray
     cell: float
     dims: np.ndarray
+    occ: np.ndarray = field(default=None, repr=False, compare=False)
     cache: object = field(default=None, repr=False, compare=False)
 
 
@@ -157,8 +169,10 @@ def build_grid(points: np.ndarray, normals: np.ndarray, cell: float) -> Grid:
     occupied = lin[np.r_[True, lin[1:] != lin[:-1]]] if len(lin) else lin
     del lin
     seed = _nearest_occupied(occupied, dims)
-    return Grid(np.ascontiguousarray(sorted_points), np.ascontiguousarray(sorted_normals),
+    grid = Grid(np.ascontiguousarray(sorted_points), np.ascontiguousarray(sorted_normals),
                 order, starts, seed, lo, cell, dims)
+    grid.occ = _block_occupancy(grid, FAR_BLOCK)
+    return grid
 
 
 def _nearest_occupied(occupied: np.ndarray, dims: np.ndarray) -> np.ndarray:
@@ -207,7 +221,7 @@ def nearest_indices(grid: Grid, queries: np.ndarray) -> np.ndarray:
     k = _compile()
     out = np.empty(len(queries), np.int64)
     k["nearest_many"](np.ascontiguousarray(queries, dtype=np.float64), grid.points,
-                      grid.starts, grid.seed, grid.origin, grid.cell, grid.dims, out)
+                      grid.starts, grid.seed, grid.occ, grid.origin, grid.cell, grid.dims, out)
     return out if grid.order is None else grid.order[out]
 
 
@@ -233,7 +247,7 @@ def _job_args(job: ScoreJob, grid: Grid) -> tuple:
             0 if t.criterion == "paper" else 1, t.c, t.a, float(t.weights.sum()),
             float(job.threshold), bool(job.early_exit), job.vectors == "surface",
             float(job.rho), grid.points, grid.normals, grid.starts, grid.seed, grid.origin, grid.cell,
-            grid.dims)
+            grid.dims, grid.occ)
 
 
 class NeighbourCache:
@@ -283,7 +297,7 @@ class NeighbourCache:
         self.llen = np.zeros(nodes, np.int32)
         self.lists = np.zeros(min(1 << 20, max(1024, self.budget // 16)), np.int32)
         self.used = np.zeros(2, np.int64)
-        self.occ = _block_occupancy(grid, CACHE_OCC_CELLS)
+        self.occ = grid.occ            # CACHE_OCC_CELLS = FAR_BLOCK
         m = float(max(np.abs(lo).max(), np.abs(hi).max(), 1.0))
         self.tol = 1e-13 * (1.0 + m) ** 2
         self.slack = float(np.sqrt(self.tol)) + 1e-9
