@@ -132,7 +132,7 @@ def test_hanger_through_a_table_top_is_invalid():
 
 
 def test_separation_measures_how_deep_a_box_is_in_a_slab():
-    from interaction_tensor.evaluation import collision
+    from interaction_tensor import collision
 
     slab = collision.MeshCollider(*collision.box((-1, -1, -0.1), (1, 1, 0.0)))
     cube = collision.Body(*collision.box((-0.05, -0.05, 0.0), (0.05, 0.05, 0.1)))

@@ -47,6 +47,9 @@ CHUNK_QUERIES = 2_000_000
 #: Why a placement the score accepted was rejected (``Detection.placement``): not tested
 #: (the score rejected it), kept, or the first test it failed, in the order they run.
 UNTESTED, PLACED, FAILS_CLEARANCE, FAILS_CONTACT, FAILS_INTERIOR = -1, 0, 1, 2, 3
+#: A placement that passed these tests but whose triangles cross the scene's: detection's
+#: exact collision test of the placements it ranks (:class:`..detect.CollisionCheck`).
+FAILS_COLLISION = 4
 #: Contact modes: no contact test, the main group (at the reference point), every group.
 CONTACT_MODES = ("off", "main", "all")
 

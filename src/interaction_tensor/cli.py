@@ -64,6 +64,9 @@ def detection_options(p) -> None:
                         "again)")
     p.add_argument("--no-interior", action="store_true",
                    help="skip the interior test (no scene surface through the object)")
+    p.add_argument("--no-collision", action="store_true",
+                   help="skip the collision test of the top predictions (a mesh scene's "
+                        "triangles against the query's, python-fcl)")
     p.add_argument("--backend", choices=("auto", "numba", "numpy", "torch"), default="auto",
                    help="scoring backend; torch runs on a CUDA device when present "
                         "(pip install 'interaction-tensor[torch]')")
@@ -169,6 +172,7 @@ def _detect_settings(args):
 
     return DetectSettings(early_exit=not args.no_early_exit, clearance=not args.no_clearance,
                           contact=not args.no_contact, interior=not args.no_interior,
+                          collision=not args.no_collision,
                           **{field: getattr(args, dest) for field, dest in _SETTING_OPTIONS.items()})
 
 
@@ -223,6 +227,14 @@ def _report(args, result, outdir) -> None:
                f"score accepted (placement tests failed: clearance "
                f"{st['pairs_failing_clearance']}, contact {st['pairs_failing_contact']}, "
                f"interior {st['pairs_failing_interior']})")
+    if st["collision_test"] == "on":
+        spent = " (the tests allowed are spent: fewer predictions)" \
+            if st["collision_tests_exhausted"] else ""
+        _say(args, f"collision test of the top predictions: {st['collision_tests']} tested, "
+                   f"{st['pairs_failing_collision']} crossing the scene{spent} in "
+                   f"{st['seconds'].get('collision', 0):.2f} s")
+    else:
+        _say(args, f"collision test {st['collision_test']}")
     if st["backend"] == "torch" and st["device"] == "cpu":
         print("itensor: note: no CUDA device, so the torch backend ran on the CPU, where the "
               "default Numba backend is much faster", file=sys.stderr)
@@ -244,7 +256,8 @@ def summary(result, outdir) -> dict:
             "pairs_scored": st["pairs_scored"], "pairs_accepted": st["pairs_accepted"],
             "pairs_accepted_by_score": st["pairs_accepted_by_score"],
             **{k: st[k] for k in ("pairs_failing_clearance", "pairs_failing_contact",
-                                  "pairs_failing_interior")},
+                                  "pairs_failing_interior", "collision_test", "collision_tests",
+                                  "pairs_failing_collision")},
             "candidates_per_second": st.get("candidates_per_second"),
             "pairs_per_second": st.get("pairs_per_second"), "seconds": st["seconds"],
             "predictions": [{"score": p.score, "position": p.position.tolist(),

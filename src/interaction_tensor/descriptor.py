@@ -137,6 +137,11 @@ class InteractionTensor:
     contact_distance, contact_fraction, contact_angle : a group keeps its contact when this
         fraction of its points have their nearest scene sample within this distance (m),
         whose normal line lies within this angle (degrees; 90: any) of the example's
+    collision_depth : detection's collision test of ranked placements on mesh scenes: the
+        query's triangles may cross the scene's only as deep as a move of this many metres
+        frees them (:mod:`.collision`); None: no collision test
+    collision_above : test only the query's triangles above the reference point by more
+        than this (m; a rider's legs hang where the support lets them); None: all of them
     ground : height (m) of the ground plane of the example, or None
     scene_points : (S, 3) scene-object samples used for the Voronoi step (subsampled)
     scene_spacing : spacing (m) of the scene-object samples; detection samples at it
@@ -175,6 +180,8 @@ class InteractionTensor:
     contact_distance: float = 0.02
     contact_fraction: float = 0.25
     contact_angle: float = 90.0
+    collision_depth: float | None = None
+    collision_above: float | None = None
     ground: float | None = None
     thresholds: dict = field(default_factory=dict)
     self_scores: dict = field(default_factory=dict)
@@ -192,15 +199,17 @@ class InteractionTensor:
         return float(self.thresholds[f"{criterion}-{which}"])
 
     def set_acceptance(self, threshold: float, clearance_limit: float | None = None,
-                       interior_limit: float | None = None, contact: tuple | None = None
-                       ) -> None:
+                       interior_limit: float | None = None, contact: tuple | None = None,
+                       collision: tuple | str | None = None) -> None:
         """Accept placements scoring at least ``threshold`` (both keypoint sets, paper
         criterion), violating at most ``clearance_limit`` of the clearance points and
         ``interior_limit`` of the interior points, and keeping their contact (``contact`` =
         (mode, distance, fraction[, angle]), see clearance.py), e.g. an affordance's
         acceptance tuned
         on validation scenes (:func:`interaction_tensor.examples.interactions.acceptance`).
-        Arguments left None keep their value."""
+        ``collision`` = (depth, above) sets the collision test of ranked placements
+        (:attr:`collision_depth`, :attr:`collision_above`; above None: the whole query),
+        ``"off"`` removes it. Arguments left None keep their value."""
         if not 0 < threshold <= 1:
             raise ValueError("threshold must be in (0, 1]")
         for name, value in (("clearance_limit", clearance_limit),
@@ -213,6 +222,12 @@ class InteractionTensor:
                     not 0 <= fraction <= 1 or not 0 < angle <= 90:
                 raise ValueError("contact must be (off|main|all, distance > 0, fraction in "
                                  "[0, 1][, angle in (0, 90]])")
+        if collision is not None and collision != "off":
+            depth, above = tuple(collision)
+            if not (np.isfinite(depth) and 0 <= depth <= 1) or \
+                    (above is not None and not abs(above) <= 10):
+                raise ValueError("collision must be 'off' or (depth in [0, 1] m, above: None "
+                                 "or a height in [-10, 10] m)")
         for which in ("weighted", "uniform"):
             self.thresholds[f"paper-{which}"] = float(threshold)
         if clearance_limit is not None:
@@ -223,6 +238,29 @@ class InteractionTensor:
             self.contact_groups = str(mode)
             self.contact_distance, self.contact_fraction = float(distance), float(fraction)
             self.contact_angle = float(angle)
+        if collision == "off":
+            self.collision_depth = self.collision_above = None
+        elif collision is not None:
+            self.collision_depth = float(depth)
+            self.collision_above = None if above is None else float(above)
+        self.__dict__.pop("_collision_body", None)
+
+    def collision_body(self):
+        """The query's triangles that detection's collision test moves into the scene, as a
+        :class:`~.collision.Body` (training frame; built once), or None when the descriptor
+        has no collision test or no triangles to test (a point-cloud query)."""
+        if self.collision_depth is None or len(self.query_faces) == 0:
+            return None
+        if "_collision_body" not in self.__dict__:
+            from .collision import Body
+
+            faces = self.query_faces
+            if self.collision_above is not None:
+                high = self.query_vertices[:, 2] > self.reference_point[2] + self.collision_above
+                faces = faces[high[faces].all(axis=1)]
+            self.__dict__["_collision_body"] = Body(self.query_vertices, faces) if len(faces) \
+                else None
+        return self.__dict__["_collision_body"]
 
     def acceptance(self) -> dict:
         """What a placement must pass (the paper criterion's threshold and the placement
@@ -231,7 +269,8 @@ class InteractionTensor:
                 "clearance_limit": self.clearance_limit, "interior_limit": self.interior_limit,
                 "contact_groups": self.contact_groups,
                 "contact_distance": self.contact_distance,
-                "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle}
+                "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
+                "collision_depth": self.collision_depth, "collision_above": self.collision_above}
 
     def pose(self, position, angle: float) -> np.ndarray:
         """4x4 pose taking the training-frame query object to ``position`` at ``angle``."""
@@ -448,6 +487,7 @@ class InteractionTensor:
             "clearance_limit": self.clearance_limit, "interior_limit": self.interior_limit,
             "contact_groups": self.contact_groups, "contact_distance": self.contact_distance,
             "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
+            "collision_depth": self.collision_depth, "collision_above": self.collision_above,
             "ground": self.ground,
             "thresholds": self.thresholds, "self_scores": self.self_scores, "meta": self.meta,
         }
@@ -523,7 +563,9 @@ class InteractionTensor:
             contact_groups=header["contact_groups"],
             contact_angle=float(header["contact_angle"]),
             contact_distance=float(header["contact_distance"]),
-            contact_fraction=float(header["contact_fraction"]), ground=header["ground"],
+            contact_fraction=float(header["contact_fraction"]),
+            collision_depth=header["collision_depth"], collision_above=header["collision_above"],
+            ground=header["ground"],
             thresholds=header["thresholds"],
             self_scores=header["self_scores"], meta=header["meta"])
         return tensor
@@ -557,6 +599,8 @@ class InteractionTensor:
                                "distance": self.contact_distance,
                                "fraction": self.contact_fraction,
                                "angle_deg": self.contact_angle},
+            "collision": ({"depth": self.collision_depth, "above": self.collision_above}
+                          if self.collision_depth is not None else "off"),
             "ground": self.ground,
             "thresholds": self.thresholds, "self_scores": self.self_scores,
             "meta": self.meta,
@@ -684,6 +728,10 @@ def validate_descriptor(path, header: dict, arrays: dict):
     ground = header.get("ground")
     if ground is not None:
         number("ground", -1e4, 1e4)
+    collision = {}
+    for field_name, low, high in (("collision_depth", 0.0, 1.0), ("collision_above", -10.0, 10.0)):
+        value = header.get(field_name)
+        collision[field_name] = None if value is None else number(field_name, low, high)
     if header.get("vectors") not in ("surface", "points"):
         bad("vectors", f"must be 'surface' or 'points', got {header.get('vectors')!r}")
     for table_name in ("thresholds", "self_scores"):
@@ -706,7 +754,7 @@ def validate_descriptor(path, header: dict, arrays: dict):
               "contact_groups": header.get("contact_groups", "off"),
               "contact_distance": header.get("contact_distance", 0.02),
               "contact_fraction": header.get("contact_fraction", 0.25),
-              "contact_angle": header.get("contact_angle", 90.0),
+              "contact_angle": header.get("contact_angle", 90.0), **collision,
               "ground": None if ground is None else float(ground), "meta": meta}
     return header, out
 

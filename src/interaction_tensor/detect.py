@@ -136,9 +136,11 @@ class Detection:
     #: compared: ``score + rest[decided_at]`` bounds a rejected pair's full score
     rest: np.ndarray | None = None
     #: (P,) int8 outcome of the placement tests: -1 not tested (the score rejected the
-    #: pair), 0 placed, else the first test failed (1 clearance, 2 contact, 3 interior:
-    #: :mod:`.clearance`)
+    #: pair), 0 placed, else the first test failed (1 clearance, 2 contact, 3 interior,
+    #: 4 collision: :mod:`.clearance`; the collision test runs on ranked pairs only)
     placement: np.ndarray | None = None
+    #: the collision test of ranked pairs (:class:`CollisionCheck`), None until built
+    collisions: "CollisionCheck | None" = field(default=None, repr=False)
 
     @property
     def accepted(self) -> np.ndarray:
@@ -371,6 +373,81 @@ def _score_all(scene, jobs, backend, index, settings, progress, label, use_cache
     return [PairScores(t, a, d, c) for t, a, d, c in zip(totals, acc, at, cmp_)]
 
 
+class CollisionCheck:
+    """Detection's exact collision test of ranked pairs (``DetectSettings.collision``).
+
+    A pair is posed (the descriptor's :meth:`~.InteractionTensor.pose`), its query triangles
+    (:meth:`~.InteractionTensor.collision_body`) are tested against the scene's mesh with
+    python-fcl, and it passes when it does not cross them or a move of the descriptor's
+    ``collision_depth`` in one of 26 directions frees it (:meth:`.MeshCollider.separation`).
+    Each pair is tested at most once (``state``: -1 untested, 0 free, 1 collides); a pair
+    found colliding loses its acceptance (``placement`` :data:`.clearance.FAILS_COLLISION`).
+    At most ``settings.collision_max_tests`` tests are run; :meth:`free` answers None once
+    they are spent.
+    """
+
+    def __init__(self, det: "Detection"):
+        self.det = det
+        st, tensor, scene = det.settings, det.tensor, det.scene
+        self.reason = None
+        if not st.collision:
+            self.reason = "off (settings)"
+        elif tensor.collision_depth is None:
+            self.reason = "off (the descriptor has no collision depth)"
+        elif getattr(scene, "mesh", None) is None:
+            self.reason = "off (the scene has no triangles)"
+        elif tensor.collision_body() is None:
+            self.reason = "off (no query triangles to test)"
+        self.on = self.reason is None
+        self.state = np.full(len(det.pair_point), -1, np.int8) if self.on else None
+        self.tests = 0
+        self.seconds = 0.0
+        self.exhausted = False
+
+    def free(self, i: int):
+        """Whether pair ``i`` keeps clear of the scene: True, False, or None when it is not
+        tested because the tests allowed are spent (or the test is off: True)."""
+        if not self.on:
+            return True
+        if self.state[i] >= 0:
+            return bool(self.state[i] == 0)
+        det = self.det
+        if self.tests >= det.settings.collision_max_tests:
+            self.exhausted = True
+            return None
+        t = time.perf_counter()
+        tensor = det.tensor
+        pose = tensor.pose(det.scene.points[det.pair_point[i]],
+                           2 * np.pi * int(det.pair_orientation[i]) / det.settings.n_orientations)
+        depth = tensor.collision_depth
+        ok = det.scene.collider().separation(tensor.collision_body(), pose,
+                                             limit=depth) <= depth
+        self.tests += 1
+        self.state[i] = 0 if ok else 1
+        if not ok:
+            from .clearance import FAILS_COLLISION
+
+            det.pairs.accepted[i] = False
+            if det.placement is not None:
+                det.placement[i] = FAILS_COLLISION
+        self.seconds += time.perf_counter() - t
+        return ok
+
+    def stats(self) -> dict:
+        """What the test did, for ``Detection.stats``."""
+        return {"collision_test": "on" if self.on else self.reason,
+                "collision_tests": self.tests,
+                "pairs_failing_collision": int((self.state == 1).sum()) if self.on else 0,
+                "collision_tests_exhausted": self.exhausted}
+
+
+def collision_check(det: "Detection") -> CollisionCheck:
+    """The detection's :class:`CollisionCheck` (built on first use, shared by its rankings)."""
+    if det.collisions is None:
+        det.collisions = CollisionCheck(det)
+    return det.collisions
+
+
 def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_orient,
                     pairs: PairScores, grid=None):
     """Apply the placement tests (clearance, contact, interior: :mod:`.clearance`) to the
@@ -397,30 +474,37 @@ def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_or
 
 def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair_orient,
             pairs, timings, backend, t0, device="cpu", clearance=None, rest=None) -> Detection:
-    """Heat map, top-k with suppression, statistics."""
+    """Top-k with suppression (placements that reach it tested for collision), heat map,
+    statistics."""
+    score_acc, viol, outcome = (clearance if clearance is not None
+                                else (pairs.accepted.copy(), None, None))
+    det = Detection(scene, tensor, settings, threshold, test_idx, cand, pair_point,
+                    pair_orient, pairs, None, None, [], {}, score_acc, viol, rest, outcome)
     n_o = settings.n_orientations
     t3 = time.perf_counter()
-    heat, count = heat_map(scene, pair_point, pairs.score, pairs.accepted)
     radius = suppression_radius(tensor, settings)
     acc = accepted_indices(pairs.accepted)
-    picks = top_k(scene.points, pairs.score[acc], settings.top_k, radius, index=pair_point[acc])
-    predictions = []
+    check = collision_check(det)
+    picks = top_k(scene.points, pairs.score[acc], settings.top_k, radius,
+                  index=pair_point[acc],
+                  accept=(lambda i: check.free(int(acc[i]))) if check.on else None)
     for i in picks:
         o, p = int(pair_orient[acc[i]]), int(pair_point[acc[i]])
         angle = 2 * np.pi * o / n_o
-        predictions.append(Prediction(position=scene.points[p].copy(), orientation_index=o,
-                                      angle=float(angle), score=float(pairs.score[acc[i]]),
-                                      pose=tensor.pose(scene.points[p], angle), point_index=p))
+        det.predictions.append(Prediction(position=scene.points[p].copy(), orientation_index=o,
+                                          angle=float(angle), score=float(pairs.score[acc[i]]),
+                                          pose=tensor.pose(scene.points[p], angle),
+                                          point_index=p))
+    timings["collision"] = check.seconds
+    det.heat, det.accepted_count = heat_map(scene, pair_point, pairs.score, pairs.accepted)
     timings["predictions"] = time.perf_counter() - t3
     timings["total"] = time.perf_counter() - t0
     decided = pairs.decided_at
-    score_acc, viol, outcome = (clearance if clearance is not None
-                                else (pairs.accepted.copy(), None, None))
     from .clearance import FAILS_CLEARANCE, FAILS_CONTACT, FAILS_INTERIOR
 
     def failing(code):
         return int((outcome == code).sum()) if outcome is not None else 0
-    stats = {
+    det.stats.update({
         "scene_points": int(len(scene)),
         "scene_notes": list(getattr(scene, "notes", [])),
         "test_points_sampled": int(len(test_idx)),
@@ -431,6 +515,7 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
         "pairs_failing_clearance": failing(FAILS_CLEARANCE),
         "pairs_failing_contact": failing(FAILS_CONTACT),
         "pairs_failing_interior": failing(FAILS_INTERIOR),
+        **check.stats(),
         "keypoint_comparisons": int(pairs.comparisons),
         "keypoint_comparisons_to_decision": int(decided.sum()),
         "mean_comparisons_per_decision": float(decided.mean()) if len(decided) else 0.0,
@@ -449,10 +534,8 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
                                   if timings.get("scoring", 0) > 0 else None),
         "pairs_per_second": (float(len(pair_point) / timings["scoring"])
                              if timings.get("scoring", 0) > 0 else None),
-    }
-    return Detection(scene, tensor, settings, threshold, test_idx, cand, pair_point,
-                     pair_orient, pairs, heat, count, predictions, stats, score_acc, viol, rest,
-                     outcome)
+    })
+    return det
 
 
 def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = None,
@@ -566,7 +649,9 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     """The ``k`` best (or worst) pairs of a detection by full score, ``radius`` apart.
 
     Best: pairs that pass the placement tests rank before those that do not, then by full
-    score. Worst: by full score alone (lowest first). Rejected pairs kept only a partial score; their full score lies between it
+    score; a pair that passes them and would enter the k is tested for collision first
+    (:class:`CollisionCheck`, when it applies) and ranks with those that do not when it
+    fails (or cannot be tested: the tests allowed are spent). Worst: by full score alone (lowest first). Rejected pairs kept only a partial score; their full score lies between it
     and ``score + rest[decided_at]``, so pairs are scored fully in the order of those bounds
     until no unscored pair can enter the k (branch and bound: exact, up to
     ``max_evaluations`` pairs scored again; past that, the best of the pairs scored, which
@@ -596,6 +681,30 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     full = np.full(n, np.nan)
     okv = np.zeros(n, bool)
     pos = det.scene.points[det.pair_point]
+    check = None if worst else collision_check(det)
+    have = np.zeros(0, np.int64)
+
+    def collision_free(j):
+        i = have[j]
+        if not okv[i] or check.free(i):
+            return True
+        okv[i], key[i] = False, full[i]       # it ranks with the pairs that fail a test
+        demoted.append(i)
+        return False
+
+    def ranked():
+        while True:
+            demoted.clear()
+            out = [int(have[i]) for i in top_k(pos[have], key[have], k, radius,
+                                               accept=collision_free if check.on else None)]
+            if check.exhausted:               # untested pairs cannot be confirmed
+                lost = have[okv[have] & (check.state[have] < 0)]
+                okv[lost], key[lost] = False, full[lost]
+                demoted.extend(lost)
+            if not demoted:
+                return out
+
+    demoted = []
     cursor = 0
     picks = []
     while True:
@@ -606,7 +715,8 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
             full[sl], okv[sl] = f, ok
             key[sl] = -f if worst else np.where(ok, 2.0, 0.0) + f
         have = np.flatnonzero(np.isfinite(key))
-        picks = [int(have[i]) for i in top_k(pos[have], key[have], k, radius)]
+        picks = ([int(have[i]) for i in top_k(pos[have], key[have], k, radius)] if worst
+                 else ranked())
         if cursor >= n or cursor >= max_evaluations:
             break
         if len(picks) == k and key[picks[-1]] >= bound[order[cursor]]:

@@ -52,7 +52,7 @@ class Prediction:
 
 
 def top_k(positions: np.ndarray, scores: np.ndarray, k: int, radius: float,
-          index: np.ndarray | None = None) -> list[int]:
+          index: np.ndarray | None = None, accept=None) -> list[int]:
     """Greedy non-maximum suppression: indices of up to ``k`` best, ``radius`` apart.
 
     Candidate i is at ``positions[i]``, or at ``positions[index[i]]`` when ``index`` is given
@@ -61,10 +61,16 @@ def top_k(positions: np.ndarray, scores: np.ndarray, k: int, radius: float,
     blocks; within a block, each one is tested against the picks so far at once (the same
     picks as repeatedly taking the best unsuppressed one, without an (N, 3) temporary per
     pick: a million accepted pairs cost their sort order only).
+
+    With ``accept``, a callable taking a candidate's index: a candidate that would be picked
+    is asked first and skipped when the answer is False (it suppresses nothing); None ends
+    the search with the picks so far. The picks are then those of the same suppression
+    among the candidates it accepts, and only candidates that no pick suppresses are asked
+    (detection's collision test of its top k).
     """
     if index is not None:
         index = np.asarray(index)
-        return top_k(Gathered(positions, index), scores, k, radius)
+        return top_k(Gathered(positions, index), scores, k, radius, accept=accept)
     scores = np.asarray(scores)
     if len(scores) == 0 or k <= 0:
         return []
@@ -85,6 +91,12 @@ def top_k(positions: np.ndarray, scores: np.ndarray, k: int, radius: float,
         for j in np.flatnonzero(free):            # at most k picks end this loop
             if not free[j]:
                 continue
+            if accept is not None:
+                ok = accept(int(idx[j]))
+                if ok is None:
+                    return picks
+                if not ok:
+                    continue
             picks.append(int(idx[j]))
             if len(picks) == k:
                 return picks

@@ -34,6 +34,9 @@ class Scene:
     report : for captured data, the :class:`~interaction_tensor.realdata.RealSceneReport` of
         its cleaning and alignment (the transform from the input frame); else None
     notes : what loading changed that the user should know (the reader's notes)
+    mesh : for a scene sampled from a triangle mesh, its (V, 3) float64 vertices (m) and
+        (F, 3) int64 faces, which detection's collision test uses (:meth:`collider`); None
+        for point clouds and frames
     """
 
     points: np.ndarray
@@ -44,8 +47,10 @@ class Scene:
     captured: bool = False
     report: object = field(default=None, repr=False)
     notes: list = field(default_factory=list, repr=False)
+    mesh: tuple | None = field(default=None, repr=False)
     _tree: cKDTree | None = field(default=None, repr=False)
     _grid: object = field(default=None, repr=False)
+    _collider: object = field(default=None, repr=False)
 
     @property
     def tree(self) -> cKDTree:
@@ -61,6 +66,15 @@ class Scene:
 
             self._grid = build_grid(self.points, self.normals, GRID_CELL_FACTOR * self.spacing)
         return self._grid
+
+    def collider(self):
+        """The scene's triangles as a :class:`~.collision.MeshCollider` (python-fcl; built on
+        first use), or None for a scene without a mesh."""
+        if self._collider is None and self.mesh is not None:
+            from .collision import MeshCollider
+
+            self._collider = MeshCollider(*self.mesh)
+        return self._collider
 
     def __len__(self) -> int:
         return len(self.points)
@@ -154,8 +168,9 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
     """Turn a mesh or a point cloud into a :class:`Scene`.
 
     Meshes are sampled area-uniformly at ``spacing`` (m): count = area / spacing^2, at most
-    ``max_points``. Point clouds are used as they are; their normals are estimated by PCA
-    when the file had none.
+    ``max_points``; the scene keeps the mesh (``Scene.mesh``) for detection's collision
+    test. Point clouds are used as they are; their normals are estimated by PCA when the
+    file had none.
     """
     validate_geometry(geometry)
     if geometry.is_mesh:
@@ -166,7 +181,9 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
         points, normals = spatially_sorted(*sample_mesh(geometry, count, seed,
                                                         face_mask=face_mask), spacing)
         return Scene(points, normals, spacing, geometry.source, sampled=True,
-                     notes=list(geometry.notes))
+                     notes=list(geometry.notes),
+                     mesh=(np.asarray(geometry.vertices, np.float64),
+                           np.asarray(geometry.faces, np.int64)))
     points = geometry.vertices
     check_memory(len(points), geometry.source)
     tree = cKDTree(points)

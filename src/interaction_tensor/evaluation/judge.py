@@ -12,7 +12,7 @@ output.
 Tests, by affordance (``tests`` in :data:`TESTS`):
 
 1. **No penetration** (all). The scene mesh and the query object are tested triangle against
-   triangle with python-fcl (:mod:`.collision`), so thin parts (a 3 mm hook wire, a hanger's
+   triangle with python-fcl (:mod:`..collision`), so thin parts (a 3 mm hook wire, a hanger's
    rods) are seen however thin they are. Containers (mugs, cups, bowls, bottles) are tested
    as their convex hull: something inside the cavity penetrates the interaction as much as
    something inside the wall. Depth is the shortest move (26 directions, a ladder of lengths)
@@ -74,7 +74,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..errors import InputError
-from . import collision
+from .. import collision
 
 #: The tests of each affordance (module docstring).
 TESTS = {

@@ -1,4 +1,6 @@
-"""Exact triangle-mesh collision for the judge, on python-fcl (the Flexible Collision Library).
+"""Exact triangle-mesh collision on python-fcl (the Flexible Collision Library): detection's
+collision test of the ranked placements (:mod:`.detect`) and the judge's penetration test
+(:mod:`.evaluation.judge`).
 
 The scene is one BVH of its triangles, built once; a query object is one or more BVHs of its
 own triangles (its parts), moved by a 4x4 pose. Triangles are tested exactly, so a 3 mm wire
@@ -16,18 +18,20 @@ from __future__ import annotations
 
 import numpy as np
 
-FCL_HINT = "pip install 'interaction-tensor[eval]' (python-fcl)"
+FCL_HINT = "pip install python-fcl (a dependency of interaction-tensor)"
 
 
 def _fcl():
     try:
         import fcl
     except ImportError as exc:       # pragma: no cover - the test extra installs it
-        raise ImportError(f"the judge needs python-fcl: {FCL_HINT}") from exc
+        raise ImportError(f"exact collision tests need python-fcl: {FCL_HINT}") from exc
     return fcl
 
 
 def _bvh(vertices: np.ndarray, faces: np.ndarray):
+    if len(faces) == 0:                 # fcl crashes (segmentation fault) on an empty model
+        raise ValueError("a collision model needs at least one triangle")
     fcl = _fcl()
     m = fcl.BVHModel()
     v = np.ascontiguousarray(vertices, dtype=np.float64)

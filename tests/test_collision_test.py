@@ -1,0 +1,159 @@
+"""Detection's collision test of ranked placements (``DetectSettings.collision``).
+
+The sampled placement tests can miss a thin panel or a table top through the query object;
+the collision test poses what would enter the top k and tests its triangles against the
+scene's. These tests check that it rejects a hanger through a desk top and keeps one hanging
+on its rail, that the suppression it plugs into picks what suppression over the accepted
+placements alone would pick, and that the descriptor keeps its setting.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+import interaction_tensor as it
+from interaction_tensor.clearance import FAILS_COLLISION
+from interaction_tensor.collision import Body, MeshCollider
+from interaction_tensor.detect import CollisionCheck, rank_pairs, suppression_radius
+from interaction_tensor.errors import InputError
+from interaction_tensor.examples import interactions
+from interaction_tensor.examples.procedural import box_part, parts_mesh
+from interaction_tensor.predictions import top_k
+
+#: every pair accepted by score and the sampled placement tests off: only collision decides
+OPEN = dict(threshold=1e-3, clearance=False, contact=False, interior=False, top_k=3)
+
+
+@pytest.fixture(scope="module")
+def hanging():
+    ex = interactions.build("hanging-hanger")
+    return ex, interactions.build_descriptor("hanging-hanger", example=ex)
+
+
+def _desk():
+    """A 1.2 x 0.6 m desk top, 3 cm thick, its top at 0.75 m, and the indices of the scene
+    samples on its top face."""
+    scene = it.prepare_scene(parts_mesh([box_part("desk", (0, 0, 0.735), (1.2, 0.6, 0.03))]),
+                             0.01, seed=0)
+    top = np.flatnonzero((scene.points[:, 2] > 0.749) & (np.abs(scene.points[:, 0]) < 0.4))
+    return scene, top
+
+
+def test_the_tuned_examples_carry_the_collision_test_chosen_on_the_labelled_set(hanging):
+    _, tensor = hanging
+    assert tensor.collision_depth == pytest.approx(0.01) and tensor.collision_above is None
+    riding = interactions.acceptance("riding")["collision"]
+    assert riding == (0.01, 0.0)               # the rider's legs hang where they can
+    assert len(tensor.collision_body()) == len(tensor.query_faces)
+
+
+def test_a_hanger_through_a_desk_top_is_never_predicted(hanging):
+    _, tensor = hanging
+    scene, top = _desk()
+    loose = it.detect(scene, tensor, it.DetectSettings(collision=False, **OPEN),
+                      test_indices=top)
+    assert len(loose.predictions) == 3          # without the test: through the desk top
+    assert loose.stats["collision_test"] == "off (settings)"
+    det = it.detect(scene, tensor, it.DetectSettings(**OPEN), test_indices=top)
+    assert det.predictions == []
+    assert det.stats["collision_test"] == "on"
+    assert det.stats["pairs_failing_collision"] == det.stats["collision_tests"] > 0
+    failed = det.collisions.state == 1
+    assert not det.pairs.accepted[failed].any()
+    assert (det.placement[failed] == FAILS_COLLISION).all()
+    # what would have been predicted crosses the desk top: exact, triangle against triangle
+    collider, body = MeshCollider(*scene.mesh), Body(tensor.query_vertices, tensor.query_faces)
+    assert all(collider.collides(body, p.pose) for p in loose.predictions)
+    # the ranking of the evaluation ranks them with the pairs that fail a test
+    idx, _, ok = rank_pairs(det, 3, suppression_radius(tensor, det.settings))
+    assert len(idx) == 3 and not ok.any()
+
+
+def test_a_hanger_on_its_rail_is_kept(hanging):
+    ex, tensor = hanging
+    scene = it.prepare_scene(ex.scene_object, 0.01, seed=0)
+    near = np.argsort(np.linalg.norm(scene.points - ex.support_point, axis=1))[:5]
+    det = it.detect(scene, tensor, it.DetectSettings(**{**OPEN, "top_k": 1}),
+                    test_indices=near)
+    assert len(det.predictions) == 1
+    assert det.predictions[0].orientation_index in (0, 4)     # across the rail, either way
+    check = det.collisions
+    across = np.flatnonzero(np.isin(det.pair_orientation, (0, 4)))
+    along = np.flatnonzero(np.isin(det.pair_orientation, (2, 6)))
+    assert all(check.free(int(i)) for i in across)            # the rail inside the hook
+    assert not any(check.free(int(i)) for i in along)         # the hook across the rail
+
+
+def test_the_tests_allowed_are_bounded_and_an_untested_placement_is_not_predicted(hanging):
+    _, tensor = hanging
+    scene, top = _desk()
+    det = it.detect(scene, tensor, it.DetectSettings(collision_max_tests=7, **OPEN),
+                    test_indices=top)
+    assert det.stats["collision_tests"] == 7 and det.stats["collision_tests_exhausted"]
+    assert det.predictions == []
+
+
+def test_point_clouds_and_descriptors_without_a_depth_skip_the_test(hanging):
+    _, tensor = hanging
+    scene, top = _desk()
+    cloud = it.prepare_scene(it.Geometry(scene.points, normals=scene.normals), 0.01)
+    det = it.detect(cloud, tensor, it.DetectSettings(**OPEN), test_indices=top)
+    assert det.stats["collision_test"] == "off (the scene has no triangles)"
+    assert len(det.predictions) == 3
+    bare = interactions.build_descriptor("hanging-hanger", tuned=False)
+    assert bare.collision_depth is None and bare.collision_body() is None
+    assert CollisionCheck(it.detect(scene, bare, it.DetectSettings(**OPEN),
+                                    test_indices=top[:10])).reason.startswith("off")
+
+
+def test_the_collision_setting_survives_a_file_and_a_bad_one_is_refused(hanging, tmp_path):
+    _, tensor = hanging
+    tensor.set_acceptance(tensor.threshold(), collision=(0.03, 0.0))
+    try:
+        back = it.InteractionTensor.load(tensor.save(tmp_path / "h.npz"))
+        assert (back.collision_depth, back.collision_above) == (0.03, 0.0)
+        assert len(back.collision_body()) < len(back.query_faces)   # the hook only
+    finally:
+        tensor.set_acceptance(tensor.threshold(), collision=(0.01, None))
+    tensor.set_acceptance(tensor.threshold(), collision="off")
+    try:
+        assert it.InteractionTensor.load(tensor.save(tmp_path / "o.npz")).collision_depth is None
+    finally:
+        tensor.set_acceptance(tensor.threshold(), collision=(0.01, None))
+    with pytest.raises(ValueError):
+        tensor.set_acceptance(tensor.threshold(), collision=(-0.01, None))
+    import json
+    with np.load(tmp_path / "h.npz") as data:
+        raw = {k: data[k] for k in data.files}
+    header = json.loads(raw["header"].tobytes())
+    header["collision_depth"] = "deep"
+    raw["header"] = np.frombuffer(json.dumps(header).encode(), np.uint8)
+    np.savez(tmp_path / "bad.npz", **raw)
+    with pytest.raises(InputError, match="collision_depth"):
+        it.InteractionTensor.load(tmp_path / "bad.npz")
+
+
+@given(st.integers(0, 2 ** 31 - 1), st.integers(1, 6), st.floats(0.0, 0.5))
+def test_suppression_with_a_test_picks_as_suppression_over_what_passes(seed, k, radius):
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 60))
+    pos = rng.uniform(0, 1, (n, 3))
+    score = np.round(rng.uniform(0, 1, n), 1)            # ties broken by the lower index
+    passes = rng.uniform(size=n) < 0.6
+    asked = []
+
+    def accept(i):
+        asked.append(i)
+        return bool(passes[i])
+    got = top_k(pos, score, k, radius, accept=accept)
+    keep = np.flatnonzero(passes)
+    want = [int(keep[i]) for i in top_k(pos[keep], score[keep], k, radius)]
+    assert got == want
+    assert set(got) <= set(asked) and len(asked) == len(set(asked))
+    # None ends the search with the picks so far
+    stop = top_k(pos, score, k, radius, accept=lambda i: None if i == got[-1] else passes[i]) \
+        if got else []
+    assert stop == got[:-1]
