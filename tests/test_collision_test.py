@@ -35,10 +35,11 @@ def hanging():
 
 def _desk():
     """A 1.2 x 0.6 m desk top, 3 cm thick, its top at 0.75 m, and the indices of the scene
-    samples on its top face."""
+    samples on its top face away from its edges."""
     scene = it.prepare_scene(parts_mesh([box_part("desk", (0, 0, 0.735), (1.2, 0.6, 0.03))]),
                              0.01, seed=0)
-    top = np.flatnonzero((scene.points[:, 2] > 0.749) & (np.abs(scene.points[:, 0]) < 0.4))
+    top = np.flatnonzero((scene.points[:, 2] > 0.749) & (np.abs(scene.points[:, 0]) < 0.4)
+                         & (np.abs(scene.points[:, 1]) < 0.2))       # the hanger within it
     return scene, top
 
 
@@ -55,11 +56,11 @@ def test_a_hanger_through_a_desk_top_is_never_predicted(hanging):
     scene, top = _desk()
     loose = it.detect(scene, tensor, it.DetectSettings(collision=False, **OPEN),
                       test_indices=top)
-    assert len(loose.predictions) == 3          # without the test: through the desk top
+    assert len(loose.predictions) >= 2          # without the test: through the desk top
     assert loose.stats["collision_test"] == "off (settings)"
-    det = it.detect(scene, tensor, it.DetectSettings(**OPEN), test_indices=top)
+    det = it.detect(scene, tensor, it.DetectSettings(**OPEN), test_indices=top[::16])
     assert det.predictions == []
-    assert det.stats["collision_test"] == "on"
+    assert det.stats["collision_test"] == "on" and not det.stats["collision_tests_exhausted"]
     assert det.stats["pairs_failing_collision"] == det.stats["collision_tests"] > 0
     failed = det.collisions.state == 1
     assert not det.pairs.accepted[failed].any()
@@ -68,8 +69,9 @@ def test_a_hanger_through_a_desk_top_is_never_predicted(hanging):
     collider, body = MeshCollider(*scene.mesh), Body(tensor.query_vertices, tensor.query_faces)
     assert all(collider.collides(body, p.pose) for p in loose.predictions)
     # the ranking of the evaluation ranks them with the pairs that fail a test
+    # (shown when nothing else is left, below every pair not known to cross the scene)
     idx, _, ok = rank_pairs(det, 3, suppression_radius(tensor, det.settings))
-    assert len(idx) == 3 and not ok.any()
+    assert len(idx) == 3 and not ok.any() and (det.collisions.state[idx] == 1).all()
 
 
 def test_a_hanger_on_its_rail_is_kept(hanging):
@@ -102,7 +104,7 @@ def test_point_clouds_and_descriptors_without_a_depth_skip_the_test(hanging):
     cloud = it.prepare_scene(it.Geometry(scene.points, normals=scene.normals), 0.01)
     det = it.detect(cloud, tensor, it.DetectSettings(**OPEN), test_indices=top)
     assert det.stats["collision_test"] == "off (the scene has no triangles)"
-    assert len(det.predictions) == 3
+    assert len(det.predictions) >= 2
     bare = interactions.build_descriptor("hanging-hanger", tuned=False)
     assert bare.collision_depth is None and bare.collision_body() is None
     assert CollisionCheck(it.detect(scene, bare, it.DetectSettings(**OPEN),

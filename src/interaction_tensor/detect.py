@@ -425,10 +425,10 @@ class CollisionCheck:
         self.tests += 1
         self.state[i] = 0 if ok else 1
         if not ok:
-            from .clearance import FAILS_COLLISION
+            from .clearance import FAILS_COLLISION, PLACED
 
             det.pairs.accepted[i] = False
-            if det.placement is not None:
+            if det.placement is not None and det.placement[i] == PLACED:
                 det.placement[i] = FAILS_COLLISION
         self.seconds += time.perf_counter() - t
         return ok
@@ -649,9 +649,10 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     """The ``k`` best (or worst) pairs of a detection by full score, ``radius`` apart.
 
     Best: pairs that pass the placement tests rank before those that do not, then by full
-    score; a pair that passes them and would enter the k is tested for collision first
-    (:class:`CollisionCheck`, when it applies) and ranks with those that do not when it
-    fails (or cannot be tested: the tests allowed are spent). Worst: by full score alone (lowest first). Rejected pairs kept only a partial score; their full score lies between it
+    score; a pair that would enter the k is tested for collision first
+    (:class:`CollisionCheck`, when it applies): one that crosses the scene ranks below every
+    other pair, one that passed the other tests but could not be tested (the tests allowed
+    are spent) with those that failed them. Worst: by full score alone (lowest first). Rejected pairs kept only a partial score; their full score lies between it
     and ``score + rest[decided_at]``, so pairs are scored fully in the order of those bounds
     until no unscored pair can enter the k (branch and bound: exact, up to
     ``max_evaluations`` pairs scored again; past that, the best of the pairs scored, which
@@ -684,11 +685,19 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     check = None if worst else collision_check(det)
     have = np.zeros(0, np.int64)
 
+    crossed = np.zeros(n, bool)               # pairs already ranked below every other
+
     def collision_free(j):
         i = have[j]
-        if not okv[i] or check.free(i):
+        if crossed[i]:
             return True
-        okv[i], key[i] = False, full[i]       # it ranks with the pairs that fail a test
+        free = check.free(i)
+        if free or (free is None and not okv[i]):
+            return True
+        # a pair that crosses the scene ranks below every other; one that passed the other
+        # tests but could not be tested (the tests are spent) ranks with those that failed
+        okv[i], key[i] = False, full[i] - (2.0 if free is False else 0.0)
+        crossed[i] = free is False
         demoted.append(i)
         return False
 

@@ -230,7 +230,8 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                     # the best and worst pairs by full score (rejected pairs scored again)
                     # (accepted pairs that would enter the top are tested for collision)
                     top, top_s, top_ok = rank_pairs(det, st.n_judged, radius)
-                    any_accepted = bool(top_ok.any())
+                    # accepted: by the score, and its placement and collision tests passed
+                    any_accepted = bool((det.pairs.accepted[top] & top_ok).any())
                     bottom, bot_s, _ = rank_pairs(det, st.n_judged, radius, worst=True)
                     score = np.zeros(len(acc))
                     score[top], score[bottom] = top_s, bot_s
