@@ -49,9 +49,8 @@ def main(argv=None) -> int:
             v, f = ex.query.vertices, ex.query.faces
             bodies = {}
             for above in ABOVE:
-                keep = np.ones(len(v), bool) if above is None else \
-                    v[:, 2] > ex.support_point[2] + above
-                faces = f[keep[f].all(axis=1)]
+                faces = collision.faces_above(v, f, None if above is None
+                                              else ex.support_point[2] + above)
                 if len(faces):                  # nothing of a bowl lies above its support
                     bodies[above] = collision.Body(v, faces)
             examples[p.example] = bodies

@@ -116,6 +116,14 @@ class Body:
         return len(self.faces)
 
 
+def faces_above(vertices: np.ndarray, faces: np.ndarray, z: float | None) -> np.ndarray:
+    """The faces whose three vertices lie above height ``z`` (m); all of them for None."""
+    if z is None:
+        return np.asarray(faces)
+    high = np.asarray(vertices)[:, 2] > z
+    return np.asarray(faces)[high[faces].all(axis=1)]
+
+
 def split_faces(vertices: np.ndarray, faces: np.ndarray, mask_vertices: np.ndarray):
     """Faces whose three vertices are all in ``mask_vertices`` (N,) bool, and the others."""
     inside = np.asarray(mask_vertices, bool)[faces].all(axis=1)

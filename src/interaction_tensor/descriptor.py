@@ -252,12 +252,11 @@ class InteractionTensor:
         if self.collision_depth is None or len(self.query_faces) == 0:
             return None
         if "_collision_body" not in self.__dict__:
-            from .collision import Body
+            from .collision import Body, faces_above
 
-            faces = self.query_faces
-            if self.collision_above is not None:
-                high = self.query_vertices[:, 2] > self.reference_point[2] + self.collision_above
-                faces = faces[high[faces].all(axis=1)]
+            faces = faces_above(self.query_vertices, self.query_faces,
+                                None if self.collision_above is None
+                                else self.reference_point[2] + self.collision_above)
             self.__dict__["_collision_body"] = Body(self.query_vertices, faces) if len(faces) \
                 else None
         return self.__dict__["_collision_body"]

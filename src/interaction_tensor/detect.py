@@ -652,8 +652,9 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     score; a pair that would enter the k is tested for collision first
     (:class:`CollisionCheck`, when it applies): one that crosses the scene ranks below every
     other pair, one that passed the other tests but could not be tested (the tests allowed
-    are spent) with those that failed them. Worst: by full score alone (lowest first). Rejected pairs kept only a partial score; their full score lies between it
-    and ``score + rest[decided_at]``, so pairs are scored fully in the order of those bounds
+    are spent) with those that failed them. Worst: by full score alone (lowest first).
+    Rejected pairs kept only a partial score; their full score lies between it and
+    ``score + rest[decided_at]``, so pairs are scored fully in the order of those bounds
     until no unscored pair can enter the k (branch and bound: exact, up to
     ``max_evaluations`` pairs scored again; past that, the best of the pairs scored, which
     are those of the highest bounds and, among equal bounds, of the highest partial
@@ -684,8 +685,8 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     pos = det.scene.points[det.pair_point]
     check = None if worst else collision_check(det)
     have = np.zeros(0, np.int64)
-
     crossed = np.zeros(n, bool)               # pairs already ranked below every other
+    demoted = []                              # pairs whose key one pass of top_k lowered
 
     def collision_free(j):
         i = have[j]
@@ -713,7 +714,6 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
             if not demoted:
                 return out
 
-    demoted = []
     cursor = 0
     picks = []
     while True:
