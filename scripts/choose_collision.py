@@ -1,11 +1,15 @@
-"""Choose detection's collision test per affordance on the judge's labelled set.
+"""Choose detection's collision tests per affordance on the judge's labelled set.
 
-For every labelled pose (:mod:`interaction_tensor.evaluation.labelled`) and every option
-(``above``: which query triangles are tested, all of them or those above the reference
-point by more than ``above`` m; ``depth``: how deep a move may free them, m), the posed query
-is tested against the scene's mesh as detection tests it (:class:`~interaction_tensor.detect.
-CollisionCheck`). The option kept per affordance rejects the most invalid poses among those
-that keep every valid one; ties go to testing more of the query (``above`` None first, then
+For every labelled pose (:mod:`interaction_tensor.evaluation.labelled`) and every test
+(``above``: which query triangles are tested, all of them or those above the reference point
+by more than ``above`` m; ``depth``: how deep a move may free them, m), the posed query is
+tested against the scene's mesh as detection tests it (:class:`~interaction_tensor.detect.
+CollisionCheck`), and so is the through test (the scene must cross the posed section of what
+passed through the query in the example: a rail through the hook; the example's descriptor's
+``through_section``). An option is one test or two (a placement must pass both), with or
+without the through test. The option kept per affordance rejects the most invalid poses
+among those that keep every valid one; ties go to fewer tests (no through test first, one
+collision test before two), then to testing more of the query (``above`` None first, then
 the lower), then to the smaller depth.
 
     python scripts/choose_collision.py --objects ../shared/data/objects \\
@@ -28,6 +32,40 @@ from interaction_tensor.io import load_geometry
 
 ABOVE = (None, 0.0, 0.05, 0.10)
 DEPTHS = (0.01, 0.02, 0.05)
+AFFORDANCES = ("placing", "sitting", "hanging", "filling", "riding")
+
+
+def _label(above) -> str:
+    return "all" if above is None else f"{above:g}"
+
+
+def options(rows: list) -> list:
+    """Every option for one affordance's rows: (tests, through, valid kept, valid, invalid
+    rejected, invalid, tie-break key); tests a tuple of (above, depth)."""
+    poses = sorted({r["pose"] for r in rows})
+    index = {p: k for k, p in enumerate(poses)}
+    valid = np.zeros(len(poses), bool)
+    crossed = np.zeros(len(poses), bool)
+    sep = {}
+    for r in rows:
+        k = index[r["pose"]]
+        valid[k], crossed[k] = r["valid"], r["through"]
+        sep.setdefault(r["above"], np.full(len(poses), np.inf))[k] = float(r["separation_m"])
+    singles = [((above, depth),) for above in ABOVE if _label(above) in sep for depth in DEPTHS]
+    pairs = [a + b for i, a in enumerate(singles) for b in singles[i + 1:]
+             if a[0][0] != b[0][0]]
+    out = []
+    for tests in singles + pairs:
+        passes = np.ones(len(poses), bool)
+        for above, depth in tests:
+            passes &= sep[_label(above)] <= depth
+        for through in (False, True):
+            ok = passes & crossed if through else passes
+            rank = tuple((ABOVE.index(a), d) for a, d in tests)
+            out.append((tests, through, int(ok[valid].sum()), int(valid.sum()),
+                        int((~ok[~valid]).sum()), int((~valid).sum()),
+                        (int(through), len(tests), rank)))
+    return out
 
 
 def main(argv=None) -> int:
@@ -39,13 +77,14 @@ def main(argv=None) -> int:
     t0 = time.perf_counter()
     poses = labelled.load()
     colliders, examples, rows = {}, {}, []
-    for p in poses:
+    for n, p in enumerate(poses):
         if p.scene not in colliders:
             g = (load_geometry(Path(args.shared) / p.scene[7:]) if p.scene.startswith("shared:")
                  else validation.build_scene(p.scene.split(":", 1)[1]).geometry)
             colliders[p.scene] = collision.MeshCollider(g.vertices, g.faces)
         if p.example not in examples:
             ex = interactions.build(p.example, args.objects)
+            tensor = interactions.build_descriptor(p.example, args.objects)
             v, f = ex.query.vertices, ex.query.faces
             bodies = {}
             for above in ABOVE:
@@ -53,55 +92,60 @@ def main(argv=None) -> int:
                                               else ex.support_point[2] + above)
                 if len(faces):                  # nothing of a bowl lies above its support
                     bodies[above] = collision.Body(v, faces)
-            examples[p.example] = bodies
-        for above, body in examples[p.example].items():
-            sep = colliders[p.scene].separation(body, np.asarray(p.pose, float),
-                                                limit=max(DEPTHS))
+            section = tensor.through_section
+            through = collision.Body(*collision.polygon(section)) if len(section) else None
+            examples[p.example] = bodies, through
+        bodies, through = examples[p.example]
+        pose = np.asarray(p.pose, float)
+        crossed = through is not None and colliders[p.scene].collides(through, pose)
+        for above, body in bodies.items():
+            sep = colliders[p.scene].separation(body, pose, limit=max(DEPTHS))
             rows.append({"affordance": p.affordance, "example": p.example, "scene": p.scene,
-                         "case": p.case, "valid": p.valid,
-                         "above": "all" if above is None else above,
-                         "separation_m": sep if np.isfinite(sep) else "inf"})
+                         "case": p.case, "valid": p.valid, "pose": n, "above": _label(above),
+                         "separation_m": sep if np.isfinite(sep) else "inf",
+                         "through": crossed})
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "labelled_separation.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
-    lines = ["# Detection's collision test, chosen on the judge's labelled set", "",
+    lines = ["# Detection's collision tests, chosen on the judge's labelled set", "",
              f"`python scripts/choose_collision.py --objects {args.objects} --shared "
              f"{args.shared} -o {args.out}` ({time.perf_counter() - t0:.0f} s). A pose passes "
-             "when its tested triangles do not cross the scene's or a move of `depth` frees "
-             "them; `above`: the triangles tested (all, or those above the reference point by "
-             "more than that many metres). Kept: the most invalid poses rejected among the "
-             "options that keep every valid pose (ties: more of the query tested, then the "
-             "smaller depth).", "",
-             "| affordance | above (m) | depth (m) | valid kept | invalid rejected | chosen |",
-             "|---|---|---:|---:|---:|:---:|"]
+             "a collision test (above, depth) when its query triangles above the reference "
+             "point by more than `above` m (all: every triangle) do not cross the scene's or "
+             "a move of `depth` m frees them, and the through test when the scene crosses "
+             "the posed section of what passed through the query in the example (a rail "
+             "through the hook). An option is one or two collision tests, with or without "
+             "the through test; a pose must pass all of them. Kept: the most invalid poses "
+             "rejected among the options that keep every valid pose (ties: no through test, "
+             "then one collision test, then more of the query tested, then the smaller "
+             "depth). Shown: every single test with and without the through test, and the "
+             "chosen option.", "",
+             "| affordance | tests (above m, depth m) | through | valid kept | invalid rejected "
+             "| chosen |", "|---|---|:---:|---:|---:|:---:|"]
     chosen = {}
-    for aff in ("placing", "sitting", "hanging", "filling", "riding"):
-        sub = [r for r in rows if r["affordance"] == aff]
-        options = []
-        for rank, above in enumerate(ABOVE):
-            for depth in DEPTHS:
-                got = [r for r in sub if r["above"] == ("all" if above is None else above)]
-                if not got:
-                    continue
-                sep = np.array([float(r["separation_m"]) for r in got])
-                valid = np.array([r["valid"] for r in got])
-                kept = int((sep[valid] <= depth).sum())
-                rejected = int((sep[~valid] > depth).sum())
-                options.append((above, depth, kept, int(valid.sum()), rejected,
-                                int((~valid).sum()), rank))
-        ok = [o for o in options if o[2] == o[3]]
-        best = max(ok, key=lambda o: (o[4], -o[6], -o[1])) if ok else None
+    for aff in AFFORDANCES:
+        opts = options([r for r in rows if r["affordance"] == aff])
+        if not opts:
+            continue
+        ok = [o for o in opts if o[2] == o[3]]
+        best = max(ok, key=lambda o: (o[4], tuple(-x for x in o[6][:2]),
+                                      tuple(-a for a, _ in o[6][2]),
+                                      tuple(-d for _, d in o[6][2]))) if ok else None
         chosen[aff] = best
-        for o in options:
-            lines.append(f"| {aff} | {'all' if o[0] is None else f'{o[0]:g}'} | {o[1]:g} | "
-                         f"{o[2]}/{o[3]} | {o[4]}/{o[5]} | {'**yes**' if o is best else ''} |")
-    lines += ["", "Chosen (`ACCEPTANCE[...]['collision']` = (depth, above)):", ""]
+        for o in opts:
+            if len(o[0]) == 1 or o is best:
+                tests = ", ".join(f"({_label(a)}, {d:g})" for a, d in o[0])
+                lines.append(f"| {aff} | {tests} | {'yes' if o[1] else ''} | {o[2]}/{o[3]} | "
+                             f"{o[4]}/{o[5]} | {'**yes**' if o is best else ''} |")
+    lines += ["", "Chosen (`ACCEPTANCE[...]`: `collision` = [(depth, above), ...], `through`):",
+              ""]
     for aff, o in chosen.items():
         lines.append(f"- {aff}: " + ("none keeps every valid pose" if o is None else
-                                     f"({o[1]:g}, {'None' if o[0] is None else f'{o[0]:g}'})"))
+                                     "collision=" + repr([(d, a) for a, d in o[0]]) +
+                                     f", through={o[1]}"))
     (out / "choice.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0

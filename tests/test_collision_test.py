@@ -2,9 +2,11 @@
 
 The sampled placement tests can miss a thin panel or a table top through the query object;
 the collision test poses what would enter the top k and tests its triangles against the
-scene's. These tests check that it rejects a hanger through a desk top and keeps one hanging
-on its rail, that the suppression it plugs into picks what suppression over the accepted
-placements alone would pick, and that the descriptor keeps its setting.
+scene's, and for hanging asks the scene to cross the hook's opening (the through test). These
+tests check that it rejects a hanger through a desk top and keeps one hanging on its rail,
+that a hook with nothing through it fails, that the suppression it plugs into picks what
+suppression over the accepted placements alone would pick, and that the descriptor keeps its
+setting.
 """
 
 from __future__ import annotations
@@ -45,10 +47,11 @@ def _desk():
 
 def test_the_tuned_examples_carry_the_collision_test_chosen_on_the_labelled_set(hanging):
     _, tensor = hanging
-    assert tensor.collision_depth == pytest.approx(0.01) and tensor.collision_above is None
-    riding = interactions.acceptance("riding")["collision"]
-    assert riding == (0.01, 0.0)               # the rider's legs hang where they can
-    assert len(tensor.collision_body()) == len(tensor.query_faces)
+    assert tensor.collision_tests == ((0.01, None),) and tensor.through
+    riding = interactions.acceptance("riding")
+    assert riding["collision"] == [(0.01, 0.0)] and not riding["through"]  # legs hang free
+    (body, depth), = tensor.collision_bodies()
+    assert len(body) == len(tensor.query_faces) and depth == 0.01
 
 
 def test_a_hanger_through_a_desk_top_is_never_predicted(hanging):
@@ -68,6 +71,8 @@ def test_a_hanger_through_a_desk_top_is_never_predicted(hanging):
     # what would have been predicted crosses the desk top: exact, triangle against triangle
     collider, body = MeshCollider(*scene.mesh), Body(tensor.query_vertices, tensor.query_faces)
     assert all(collider.collides(body, p.pose) for p in loose.predictions)
+    # the desk top crosses the hook's opening: they fail the collision test, not that one
+    assert det.stats["pairs_with_nothing_through"] == 0
     # the ranking of the evaluation ranks them with the pairs that fail a test
     # (shown when nothing else is left, below every pair not known to cross the scene)
     idx, _, ok = rank_pairs(det, 3, suppression_radius(tensor, det.settings))
@@ -106,36 +111,98 @@ def test_point_clouds_and_descriptors_without_a_depth_skip_the_test(hanging):
     assert det.stats["collision_test"] == "off (the scene has no triangles)"
     assert len(det.predictions) >= 2
     bare = interactions.build_descriptor("hanging-hanger", tuned=False)
-    assert bare.collision_depth is None and bare.collision_body() is None
+    assert bare.collision_tests == () and bare.collision_bodies() == []
+    assert not bare.through and bare.through_body() is None
     assert CollisionCheck(it.detect(scene, bare, it.DetectSettings(**OPEN),
                                     test_indices=top[:10])).reason.startswith("off")
 
 
 def test_the_collision_setting_survives_a_file_and_a_bad_one_is_refused(hanging, tmp_path):
     _, tensor = hanging
-    tensor.set_acceptance(tensor.threshold(), collision=(0.03, 0.0))
+    tensor.set_acceptance(tensor.threshold(), collision=[(0.03, 0.0), (0.05, None)],
+                          through=False)
     try:
         back = it.InteractionTensor.load(tensor.save(tmp_path / "h.npz"))
-        assert (back.collision_depth, back.collision_above) == (0.03, 0.0)
-        assert len(back.collision_body()) < len(back.query_faces)   # the hook only
+        assert back.collision_tests == ((0.03, 0.0), (0.05, None)) and not back.through
+        (hook, d1), (whole, d2) = back.collision_bodies()
+        assert len(hook) < len(whole) == len(back.query_faces) and (d1, d2) == (0.03, 0.05)
+        np.testing.assert_array_equal(back.through_section, tensor.through_section)
     finally:
-        tensor.set_acceptance(tensor.threshold(), collision=(0.01, None))
+        tensor.set_acceptance(tensor.threshold(), **{k: interactions.acceptance("hanging")[k]
+                                                     for k in ("collision", "through")})
     tensor.set_acceptance(tensor.threshold(), collision="off")
     try:
-        assert it.InteractionTensor.load(tensor.save(tmp_path / "o.npz")).collision_depth is None
+        assert it.InteractionTensor.load(tensor.save(tmp_path / "o.npz")).collision_tests == ()
     finally:
-        tensor.set_acceptance(tensor.threshold(), collision=(0.01, None))
-    with pytest.raises(ValueError):
-        tensor.set_acceptance(tensor.threshold(), collision=(-0.01, None))
+        tensor.set_acceptance(tensor.threshold(), collision=[(0.01, None)])
+    for wrong in ((-0.01, None), [(0.01, None), (0.01,)], "on", (0.01, "high")):
+        with pytest.raises(ValueError):
+            tensor.set_acceptance(tensor.threshold(), collision=wrong)
     import json
     with np.load(tmp_path / "h.npz") as data:
         raw = {k: data[k] for k in data.files}
     header = json.loads(raw["header"].tobytes())
-    header["collision_depth"] = "deep"
-    raw["header"] = np.frombuffer(json.dumps(header).encode(), np.uint8)
-    np.savez(tmp_path / "bad.npz", **raw)
-    with pytest.raises(InputError, match="collision_depth"):
-        it.InteractionTensor.load(tmp_path / "bad.npz")
+
+    def written(name, **change):
+        h = {k: v for k, v in header.items() if k not in ("collision_tests", "through")}
+        h.update(change)
+        raw["header"] = np.frombuffer(json.dumps(h).encode(), np.uint8)
+        np.savez(tmp_path / name, **raw)
+        return tmp_path / name
+    for name, change, field in (("a.npz", {"collision_tests": [["deep", None]]},
+                                 "collision_tests"),
+                                ("b.npz", {"collision_tests": [[0.01, None]], "through": 1},
+                                 "through"),
+                                ("c.npz", {"collision_depth": "deep"}, "collision_depth")):
+        with pytest.raises(InputError, match=field):
+            it.InteractionTensor.load(written(name, **change))
+    # a file of the day before (one test as collision_depth, collision_above) still reads
+    old = it.InteractionTensor.load(written("old.npz", collision_depth=0.02,
+                                            collision_above=None))
+    assert old.collision_tests == ((0.02, None),) and not old.through
+
+
+def test_a_hook_with_nothing_through_it_fails_and_one_on_its_rail_passes(hanging):
+    ex, tensor = hanging
+    body = tensor.through_body()
+    lo, hi = tensor.through_section.min(axis=0), tensor.through_section.max(axis=0)
+    # the opening under the hook: below the reference point (a surface the hook only rests
+    # on does not reach it), as wide as the hook's inside, one plane (the hook's)
+    assert hi[2] < tensor.reference_point[2] - 0.002 and hi[2] - lo[2] > 0.02
+    assert np.ptp(tensor.through_section[:, 1]) < 1e-3                  # across the rail
+    rail = MeshCollider(ex.scene_object.vertices, ex.scene_object.faces)
+    at = np.eye(4)
+    assert rail.collides(body, at)                       # the example: the rail through it
+    end = float(np.abs(ex.scene_object.vertices[:, 1]).max()) + 0.05
+    for shift in ((0.08, 0, 0), (0, 0, 0.05), (0, end, 0)):   # beside, above, off its end
+        moved = at.copy()
+        moved[:3, 3] = shift
+        assert not rail.collides(body, moved), shift
+    # the top of a cabinet that the hook rests on is not through it (the hook through the
+    # top is the collision test's to reject); a desk top thinner than the hook is
+    cabinet = parts_mesh([box_part("cabinet", (0, 0, 0.4), (0.6, 0.6, 0.8))])
+    on_top = tensor.pose([0.0, 0.0, 0.8], 0.0)
+    assert not MeshCollider(cabinet.vertices, cabinet.faces).collides(body, on_top)
+    scene, top = _desk()
+    assert MeshCollider(*scene.mesh).collides(body, tensor.pose(scene.points[top[0]], 0.0))
+
+
+def test_detection_with_the_through_test_predicts_only_hooks_with_something_through(hanging):
+    ex, tensor = hanging
+    # a rail beside a cabinet: the hook rests on both tops, only the rail goes through it
+    parts = [box_part("cabinet", (0.6, 0, 0.8), (0.4, 0.4, 1.6))]
+    scene_geom = parts_mesh(parts)
+    rail = ex.scene_object
+    both = it.Geometry(np.vstack([scene_geom.vertices, rail.vertices]),
+                       np.vstack([scene_geom.faces, rail.faces + len(scene_geom.vertices)]))
+    scene = it.prepare_scene(both, 0.01, seed=0)
+    up = np.flatnonzero(scene.points[:, 2] > 1.55)
+    det = it.detect(scene, tensor, it.DetectSettings(**{**OPEN, "top_k": 5}),
+                    test_indices=up)
+    assert det.stats["pairs_with_nothing_through"] > 0
+    collider, body = MeshCollider(*scene.mesh), tensor.through_body()
+    assert det.predictions and all(collider.collides(body, p.pose) for p in det.predictions)
+    assert all(abs(p.position[0]) < 0.05 for p in det.predictions)     # on the rail
 
 
 @given(st.integers(0, 2 ** 31 - 1), st.integers(1, 6), st.floats(0.0, 0.5))

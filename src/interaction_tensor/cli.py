@@ -230,8 +230,10 @@ def _report(args, result, outdir) -> None:
     if st["collision_test"] == "on":
         spent = " (the tests allowed are spent: fewer predictions)" \
             if st["collision_tests_exhausted"] else ""
+        through = f", {st['pairs_with_nothing_through']} of them with nothing through the " \
+            "hook" if result.tensor.through else ""
         _say(args, f"collision test of the top predictions: {st['collision_tests']} tested, "
-                   f"{st['pairs_failing_collision']} crossing the scene{spent} in "
+                   f"{st['pairs_failing_collision']} failing{through}{spent} in "
                    f"{st['seconds'].get('collision', 0):.2f} s")
     else:
         _say(args, f"collision test {st['collision_test']}")
@@ -257,7 +259,7 @@ def summary(result, outdir) -> dict:
             "pairs_accepted_by_score": st["pairs_accepted_by_score"],
             **{k: st[k] for k in ("pairs_failing_clearance", "pairs_failing_contact",
                                   "pairs_failing_interior", "collision_test", "collision_tests",
-                                  "pairs_failing_collision")},
+                                  "pairs_failing_collision", "pairs_with_nothing_through")},
             "candidates_per_second": st.get("candidates_per_second"),
             "pairs_per_second": st.get("pairs_per_second"), "seconds": st["seconds"],
             "predictions": [{"score": p.score, "position": p.position.tolist(),

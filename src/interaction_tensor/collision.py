@@ -153,3 +153,78 @@ def box(lo, hi):
     m = trimesh.creation.box(extents=hi - lo)
     m.apply_translation((lo + hi) / 2)
     return np.asarray(m.vertices), np.asarray(m.faces)
+
+
+def through_section(query_vertices: np.ndarray, scene_points: np.ndarray,
+                    query_points: np.ndarray, margin: float, gap: float,
+                    min_points: int = 12, cell: float = 0.001) -> np.ndarray:
+    """Where the scene-object passes through the query object in an example (a rail through
+    a hook, a peg through a strap's loop), as a flat convex polygon: (K, 3) vertices in
+    order, or (0, 3) when nothing of the scene-object lies inside the query's convex hull.
+
+    ``scene_points`` are dense samples of the scene-object near the query, ``query_points``
+    dense samples of the query's surface. The scene-object samples inside the query's
+    convex hull are projected along the direction in which the scene-object runs through it
+    (the principal axis of its samples within twice their extent: the rail's) onto the plane
+    through their centroid. The polygon is their region widened by ``margin`` (m) within that
+    plane, less what lies within ``gap`` (m) of the query's surface: the opening of the hook
+    around the rail, short of the wire. A surface that only touches the hook where it rests
+    (a flat top under the hook) does not reach it; a rail, peg or panel edge through the
+    hook crosses it. Detection poses the polygon and asks the scene's triangles to cross it
+    (:class:`~.detect.CollisionCheck`).
+    """
+    from scipy import ndimage
+    from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
+
+    empty = np.zeros((0, 3))
+    q = np.asarray(query_vertices, float)
+    pts = np.asarray(scene_points, float)
+    if len(q) < 4 or len(pts) < min_points:
+        return empty
+    try:
+        hull = Delaunay(q[ConvexHull(q).vertices])
+    except QhullError:
+        return empty
+    inside = pts[hull.find_simplex(pts) >= 0]
+    if len(inside) < min_points:
+        return empty
+    centre = inside.mean(axis=0)
+    extent = float(np.linalg.norm(np.ptp(inside, axis=0)))
+    near = pts[np.linalg.norm(pts - centre, axis=1) <= 2 * extent]
+    axis = np.linalg.svd(near - near.mean(axis=0), full_matrices=False)[2][0]
+    u = np.linalg.svd(inside - centre - np.outer((inside - centre) @ axis, axis),
+                      full_matrices=False)[2][0]
+    w = np.cross(axis, u)
+    flat = np.c_[(inside - centre) @ u, (inside - centre) @ w]
+    lo, hi = flat.min(axis=0) - margin, flat.max(axis=0) + margin
+    gu, gw = (np.arange(lo[k], hi[k] + cell, cell) for k in (0, 1))
+    grid = np.stack(np.meshgrid(gu, gw, indexing="ij"), -1).reshape(-1, 2)
+    near_t, _ = cKDTree(flat).query(grid, distance_upper_bound=margin + cell)
+    lifted = centre + grid[:, :1] * u + grid[:, 1:] * w
+    clear, _ = cKDTree(np.asarray(query_points, float)).query(lifted)
+    keep = (np.isfinite(near_t) & (clear >= gap)).reshape(len(gu), len(gw))
+    # the opening itself: the free cells connected to the middle of the scene-object's
+    # section, not the inside of the hook's wire beyond it
+    parts, _ = ndimage.label(keep)
+    middle = np.argmin(np.where(keep.ravel(), (grid ** 2).sum(axis=1), np.inf))
+    if not keep.ravel()[middle]:
+        return empty
+    grid = grid[parts.ravel() == parts.ravel()[middle]]
+    if len(grid) < 3:
+        return empty
+    try:
+        ring = ConvexHull(grid).vertices             # counter-clockwise in 2-D
+    except QhullError:                                # all on one line
+        return empty
+    return centre + grid[ring, :1] * u + grid[ring, 1:] * w
+
+
+def polygon(vertices: np.ndarray):
+    """A flat convex polygon as a closed body (two triangle fans about its centroid, back to
+    back): (V, 3) vertices, (F, 3) faces."""
+    ring = np.asarray(vertices, float)
+    n = len(ring)
+    v = np.vstack([ring.mean(axis=0), ring])
+    i = np.arange(n)
+    front = np.c_[np.zeros(n, int), 1 + i, 1 + (i + 1) % n]
+    return v, np.vstack([front, front[:, [0, 2, 1]]])

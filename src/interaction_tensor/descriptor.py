@@ -137,11 +137,16 @@ class InteractionTensor:
     contact_distance, contact_fraction, contact_angle : a group keeps its contact when this
         fraction of its points have their nearest scene sample within this distance (m),
         whose normal line lies within this angle (degrees; 90: any) of the example's
-    collision_depth : detection's collision test of ranked placements on mesh scenes: the
-        query's triangles may cross the scene's only as deep as a move of this many metres
-        frees them (:mod:`.collision`); None: no collision test
-    collision_above : test only the query's triangles above the reference point by more
-        than this (m; a rider's legs hang where the support lets them); None: all of them
+    collision_tests : detection's collision tests of ranked placements on mesh scenes, each
+        (depth, above): the query's triangles above the reference point by more than
+        ``above`` m (None: all of them; a rider's legs hang where the support lets them) may
+        cross the scene's only as deep as a move of ``depth`` m frees them
+        (:mod:`.collision`); a placement must pass every test; empty: no collision test
+    through_section : (K, 3) flat polygon, the cross-section of the scene-object that passed
+        through the query object in the example (a rail through a hook:
+        :func:`.collision.through_section`), or (0, 3)
+    through : whether detection asks the scene to cross the posed ``through_section`` (on
+        mesh scenes; hanging)
     ground : height (m) of the ground plane of the example, or None
     scene_points : (S, 3) scene-object samples used for the Voronoi step (subsampled)
     scene_spacing : spacing (m) of the scene-object samples; detection samples at it
@@ -180,8 +185,9 @@ class InteractionTensor:
     contact_distance: float = 0.02
     contact_fraction: float = 0.25
     contact_angle: float = 90.0
-    collision_depth: float | None = None
-    collision_above: float | None = None
+    collision_tests: tuple = ()
+    through_section: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    through: bool = False
     ground: float | None = None
     thresholds: dict = field(default_factory=dict)
     self_scores: dict = field(default_factory=dict)
@@ -200,16 +206,18 @@ class InteractionTensor:
 
     def set_acceptance(self, threshold: float, clearance_limit: float | None = None,
                        interior_limit: float | None = None, contact: tuple | None = None,
-                       collision: tuple | str | None = None) -> None:
+                       collision: tuple | list | str | None = None,
+                       through: bool | None = None) -> None:
         """Accept placements scoring at least ``threshold`` (both keypoint sets, paper
         criterion), violating at most ``clearance_limit`` of the clearance points and
         ``interior_limit`` of the interior points, and keeping their contact (``contact`` =
         (mode, distance, fraction[, angle]), see clearance.py), e.g. an affordance's
         acceptance tuned
         on validation scenes (:func:`interaction_tensor.examples.interactions.acceptance`).
-        ``collision`` = (depth, above) sets the collision test of ranked placements
-        (:attr:`collision_depth`, :attr:`collision_above`; above None: the whole query),
-        ``"off"`` removes it. Arguments left None keep their value."""
+        ``collision`` = (depth, above), or a list of them, sets the collision tests of ranked
+        placements (:attr:`collision_tests`; above None: the whole query), ``"off"`` removes
+        them; ``through`` turns the through-the-hook test on or off (:attr:`through`).
+        Arguments left None keep their value."""
         if not 0 < threshold <= 1:
             raise ValueError("threshold must be in (0, 1]")
         for name, value in (("clearance_limit", clearance_limit),
@@ -222,12 +230,10 @@ class InteractionTensor:
                     not 0 <= fraction <= 1 or not 0 < angle <= 90:
                 raise ValueError("contact must be (off|main|all, distance > 0, fraction in "
                                  "[0, 1][, angle in (0, 90]])")
-        if collision is not None and collision != "off":
-            depth, above = tuple(collision)
-            if not (np.isfinite(depth) and 0 <= depth <= 1) or \
-                    (above is not None and not abs(above) <= 10):
-                raise ValueError("collision must be 'off' or (depth in [0, 1] m, above: None "
-                                 "or a height in [-10, 10] m)")
+        tests = None
+        if collision is not None:
+            tests = () if isinstance(collision, str) and collision == "off" else \
+                collision_tests(collision)
         for which in ("weighted", "uniform"):
             self.thresholds[f"paper-{which}"] = float(threshold)
         if clearance_limit is not None:
@@ -238,28 +244,42 @@ class InteractionTensor:
             self.contact_groups = str(mode)
             self.contact_distance, self.contact_fraction = float(distance), float(fraction)
             self.contact_angle = float(angle)
-        if collision == "off":
-            self.collision_depth = self.collision_above = None
-        elif collision is not None:
-            self.collision_depth = float(depth)
-            self.collision_above = None if above is None else float(above)
-        self.__dict__.pop("_collision_body", None)
+        if tests is not None:
+            self.collision_tests = tests
+        if through is not None:
+            self.through = bool(through)
+        self.__dict__.pop("_collision_bodies", None)
+        self.__dict__.pop("_through_body", None)
 
-    def collision_body(self):
-        """The query's triangles that detection's collision test moves into the scene, as a
-        :class:`~.collision.Body` (training frame; built once), or None when the descriptor
-        has no collision test or no triangles to test (a point-cloud query)."""
-        if self.collision_depth is None or len(self.query_faces) == 0:
+    def collision_bodies(self) -> list:
+        """Detection's collision tests as (:class:`~.collision.Body` of the tested query
+        triangles in the training frame, depth m), built once; empty when the descriptor has
+        no collision test or no triangles to test (a point-cloud query). A test whose height
+        leaves no triangle is dropped."""
+        if "_collision_bodies" not in self.__dict__:
+            bodies = []
+            if len(self.query_faces):
+                from .collision import Body, faces_above
+
+                for depth, above in self.collision_tests:
+                    faces = faces_above(self.query_vertices, self.query_faces,
+                                        None if above is None
+                                        else self.reference_point[2] + above)
+                    if len(faces):
+                        bodies.append((Body(self.query_vertices, faces), depth))
+            self.__dict__["_collision_bodies"] = bodies
+        return self.__dict__["_collision_bodies"]
+
+    def through_body(self):
+        """The :attr:`through_section` as a closed flat :class:`~.collision.Body` (training
+        frame, built once), or None when the test is off or the example had no section."""
+        if not self.through or len(self.through_section) < 3:
             return None
-        if "_collision_body" not in self.__dict__:
-            from .collision import Body, faces_above
+        if "_through_body" not in self.__dict__:
+            from .collision import Body, polygon
 
-            faces = faces_above(self.query_vertices, self.query_faces,
-                                None if self.collision_above is None
-                                else self.reference_point[2] + self.collision_above)
-            self.__dict__["_collision_body"] = Body(self.query_vertices, faces) if len(faces) \
-                else None
-        return self.__dict__["_collision_body"]
+            self.__dict__["_through_body"] = Body(*polygon(self.through_section))
+        return self.__dict__["_through_body"]
 
     def acceptance(self) -> dict:
         """What a placement must pass (the paper criterion's threshold and the placement
@@ -269,7 +289,8 @@ class InteractionTensor:
                 "contact_groups": self.contact_groups,
                 "contact_distance": self.contact_distance,
                 "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
-                "collision_depth": self.collision_depth, "collision_above": self.collision_above}
+                "collision_tests": [list(t) for t in self.collision_tests],
+                "through": self.through}
 
     def pose(self, position, angle: float) -> np.ndarray:
         """4x4 pose taking the training-frame query object to ``position`` at ``angle``."""
@@ -392,6 +413,7 @@ class InteractionTensor:
             c_free = np.minimum(c_free, np.maximum(c_pts[:, 2] - ground, 0.0))
         c_rad = np.minimum(c_free, settings.clearance_max)
         i_pts, i_rad = _interior_samples(query, settings)
+        through = _through_section(query, scene_object, settings)
         timings["clearance"] = time.perf_counter() - t_c
 
         # 6. reference point, contact ---------------------------------------------------
@@ -435,7 +457,8 @@ class InteractionTensor:
             contact_groups=settings.contact_groups,
             contact_distance=float(settings.contact_distance),
             contact_fraction=float(settings.contact_fraction),
-            contact_angle=float(settings.contact_angle), ground=ground)
+            contact_angle=float(settings.contact_angle), through_section=through,
+            ground=ground)
 
         # 7. calibration: the example scored against a re-sampled copy of itself ----------
         say("calibration")
@@ -486,7 +509,7 @@ class InteractionTensor:
             "clearance_limit": self.clearance_limit, "interior_limit": self.interior_limit,
             "contact_groups": self.contact_groups, "contact_distance": self.contact_distance,
             "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
-            "collision_depth": self.collision_depth, "collision_above": self.collision_above,
+            "collision_tests": [list(t) for t in self.collision_tests], "through": self.through,
             "ground": self.ground,
             "thresholds": self.thresholds, "self_scores": self.self_scores, "meta": self.meta,
         }
@@ -502,6 +525,7 @@ class InteractionTensor:
             "contact_group_points": self.contact_group_points,
             "contact_group_ids": np.asarray(self.contact_group_ids, np.int64),
             "contact_group_normals": self.contact_group_normals,
+            "through_section": self.through_section,
         }
         for name in ("weighted", "uniform"):
             kp = self.keypoints(name)
@@ -563,7 +587,8 @@ class InteractionTensor:
             contact_angle=float(header["contact_angle"]),
             contact_distance=float(header["contact_distance"]),
             contact_fraction=float(header["contact_fraction"]),
-            collision_depth=header["collision_depth"], collision_above=header["collision_above"],
+            collision_tests=header["collision_tests"], through=header["through"],
+            through_section=arrays["through_section"],
             ground=header["ground"],
             thresholds=header["thresholds"],
             self_scores=header["self_scores"], meta=header["meta"])
@@ -598,8 +623,9 @@ class InteractionTensor:
                                "distance": self.contact_distance,
                                "fraction": self.contact_fraction,
                                "angle_deg": self.contact_angle},
-            "collision": ({"depth": self.collision_depth, "above": self.collision_above}
-                          if self.collision_depth is not None else "off"),
+            "collision": ([{"depth": d, "above": a} for d, a in self.collision_tests]
+                          or "off"),
+            "through": ({"on": self.through, "section_vertices": int(len(self.through_section))}),
             "ground": self.ground,
             "thresholds": self.thresholds, "self_scores": self.self_scores,
             "meta": self.meta,
@@ -616,7 +642,7 @@ _ARRAYS = {
     "clearance_points": ((None, 3), "f"), "clearance_radius": ((None,), "f"),
     "interior_points": ((None, 3), "f"), "interior_radius": ((None,), "f"),
     "contact_group_points": ((None, 3), "f"), "contact_group_ids": ((None,), "i"),
-    "contact_group_normals": ((None, 3), "f"),
+    "contact_group_normals": ((None, 3), "f"), "through_section": ((None, 3), "f"),
     **{f"{k}_{part}": (shape, "f") for k in ("weighted", "uniform")
        for part, shape in (("points", (None, 3)), ("provenance", (None, 3)),
                            ("weights", (None,)))},
@@ -630,6 +656,7 @@ _OPTIONAL = {
     "contact_group_points": lambda: np.zeros((0, 3)),
     "contact_group_ids": lambda: np.zeros(0, np.int64),
     "contact_group_normals": lambda: np.zeros((0, 3)),
+    "through_section": lambda: np.zeros((0, 3)),
 }
 
 
@@ -727,10 +754,23 @@ def validate_descriptor(path, header: dict, arrays: dict):
     ground = header.get("ground")
     if ground is not None:
         number("ground", -1e4, 1e4)
-    collision = {}
-    for field_name, low, high in (("collision_depth", 0.0, 1.0), ("collision_above", -10.0, 10.0)):
-        value = header.get(field_name)
-        collision[field_name] = None if value is None else number(field_name, low, high)
+    if "collision_tests" in header:
+        try:
+            tests = collision_tests(header["collision_tests"])
+        except (TypeError, ValueError) as exc:
+            bad("collision_tests", str(exc))
+    else:       # files of 2026-11-25: one test as collision_depth, collision_above
+        depth, above = header.get("collision_depth"), header.get("collision_above")
+        if depth is not None:
+            depth = number("collision_depth", 0.0, 1.0)
+        if above is not None:
+            above = number("collision_above", -10.0, 10.0)
+        tests = () if depth is None else ((depth, above),)
+    through = header.get("through", False)
+    if not isinstance(through, bool):
+        bad("through", f"must be true or false, got {through!r}")
+    if len(out["through_section"]) and len(out["through_section"]) < 3:
+        bad("through_section", "must be a polygon of at least 3 vertices, or empty")
     if header.get("vectors") not in ("surface", "points"):
         bad("vectors", f"must be 'surface' or 'points', got {header.get('vectors')!r}")
     for table_name in ("thresholds", "self_scores"):
@@ -753,9 +793,41 @@ def validate_descriptor(path, header: dict, arrays: dict):
               "contact_groups": header.get("contact_groups", "off"),
               "contact_distance": header.get("contact_distance", 0.02),
               "contact_fraction": header.get("contact_fraction", 0.25),
-              "contact_angle": header.get("contact_angle", 90.0), **collision,
+              "contact_angle": header.get("contact_angle", 90.0),
+              "collision_tests": tests, "through": through,
               "ground": None if ground is None else float(ground), "meta": meta}
     return header, out
+
+
+#: Samples of the scene-object in the query's box that :func:`_through_section` looks at.
+THROUGH_SAMPLES = 100_000
+#: How far (in training spacings) the through section keeps from the query's surface: a
+#: surface that touches the hook only where it rests does not reach the section.
+THROUGH_GAP = 0.25
+
+
+def _through_section(query: Geometry, scene_object: Geometry, settings: TrainSettings):
+    """Where the scene-object passes through the query (:func:`.collision.through_section`),
+    from dense samples of the scene-object in the query's box and of the query (a hook's
+    inside is a few millimetres thick: the detection spacing would miss it): the opening
+    widened by the training spacing, kept :data:`THROUGH_GAP` spacings from the query's surface."""
+    from .collision import through_section
+
+    lo = query.vertices.min(axis=0) - settings.scene_spacing
+    hi = query.vertices.max(axis=0) + settings.scene_spacing
+    if scene_object.is_mesh:
+        tri = scene_object.vertices[scene_object.faces]
+        mask = ((tri.max(axis=1) >= lo) & (tri.min(axis=1) <= hi)).all(axis=1)
+        if not mask.any():
+            return np.zeros((0, 3))
+        pts, _ = sample_mesh(scene_object, THROUGH_SAMPLES, settings.seed + 8, face_mask=mask)
+    else:
+        v = scene_object.vertices
+        pts = v[((v >= lo) & (v <= hi)).all(axis=1)]
+    q_pts = sample_mesh(query, THROUGH_SAMPLES, settings.seed + 9)[0] if query.is_mesh \
+        else query.vertices
+    return through_section(query.vertices, pts, q_pts, settings.scene_spacing,
+                           THROUGH_GAP * settings.scene_spacing)
 
 
 def _scene_object_samples(scene_object: Geometry, centre, crop: float, spacing: float, seed):
@@ -914,3 +986,25 @@ def _contact_groups(q_pts, q_gap, q_normal, ground, reference, settings: TrainSe
         out_n.append(nrm[members])
         out_g.append(np.full(len(members), new, np.int64))
     return np.concatenate(out_p), np.concatenate(out_g), np.concatenate(out_n)
+
+
+def collision_tests(value) -> tuple:
+    """Detection's collision tests from (depth, above) or a list of them, checked: depth in
+    [0, 1] m, above None or a height in [-10, 10] m. Raises ValueError."""
+    items = list(value) if not isinstance(value, (str, bytes)) else None
+    if items and not isinstance(items[0], (list, tuple)):
+        items = [items]                            # one (depth, above)
+    if items is None:
+        raise ValueError("must be (depth, above) or a list of them")
+    tests = []
+    for item in items:
+        item = tuple(item) if isinstance(item, (list, tuple)) else ()
+        ok = len(item) == 2 and all(v is None or (isinstance(v, (int, float)) and
+                                                  not isinstance(v, bool)) for v in item)
+        depth, above = item if ok else (None, None)
+        if not ok or depth is None or not (np.isfinite(depth) and 0 <= depth <= 1) or \
+                (above is not None and not (np.isfinite(above) and abs(above) <= 10)):
+            raise ValueError(f"collision test {list(item) if item else value!r} must be (depth "
+                             "in [0, 1] m, above: None or a height in [-10, 10] m)")
+        tests.append((float(depth), None if above is None else float(above)))
+    return tuple(tests)

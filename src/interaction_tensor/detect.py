@@ -374,16 +374,19 @@ def _score_all(scene, jobs, backend, index, settings, progress, label, use_cache
 
 
 class CollisionCheck:
-    """Detection's exact collision test of ranked pairs (``DetectSettings.collision``).
+    """Detection's exact collision tests of ranked pairs (``DetectSettings.collision``).
 
-    A pair is posed (the descriptor's :meth:`~.InteractionTensor.pose`), its query triangles
-    (:meth:`~.InteractionTensor.collision_body`) are tested against the scene's mesh with
-    python-fcl, and it passes when it does not cross them or a move of the descriptor's
-    ``collision_depth`` in one of 26 directions frees it (:meth:`.MeshCollider.separation`).
-    Each pair is tested at most once (``state``: -1 untested, 0 free, 1 collides); a pair
-    found colliding loses its acceptance (``placement`` :data:`.clearance.FAILS_COLLISION`).
-    At most ``settings.collision_max_tests`` tests are run; :meth:`free` answers None once
-    they are spent.
+    A pair is posed (the descriptor's :meth:`~.InteractionTensor.pose`) and tested against
+    the scene's mesh with python-fcl. It passes when, for each of the descriptor's
+    :attr:`~.InteractionTensor.collision_tests`, its tested query triangles do not cross the
+    scene's or a move of that test's depth in one of 26 directions frees them
+    (:meth:`.MeshCollider.separation`), and, where the descriptor asks for it
+    (:attr:`~.InteractionTensor.through`), the scene crosses the posed section of what went
+    through the query in the example (a rail through the hook). Each pair is tested at most
+    once (``state``: -1 untested, 0 passes, 1 fails); a pair that fails loses its acceptance
+    (``placement`` :data:`.clearance.FAILS_COLLISION`). At most
+    ``settings.collision_max_tests`` pairs are tested; :meth:`free` answers None once they
+    are spent.
     """
 
     def __init__(self, det: "Detection"):
@@ -392,21 +395,22 @@ class CollisionCheck:
         self.reason = None
         if not st.collision:
             self.reason = "off (settings)"
-        elif tensor.collision_depth is None:
-            self.reason = "off (the descriptor has no collision depth)"
+        elif not tensor.collision_tests and not tensor.through:
+            self.reason = "off (the descriptor has no collision test)"
         elif getattr(scene, "mesh", None) is None:
             self.reason = "off (the scene has no triangles)"
-        elif tensor.collision_body() is None:
+        elif not tensor.collision_bodies() and tensor.through_body() is None:
             self.reason = "off (no query triangles to test)"
         self.on = self.reason is None
         self.state = np.full(len(det.pair_point), -1, np.int8) if self.on else None
         self.tests = 0
+        self.failed_through = 0
         self.seconds = 0.0
         self.exhausted = False
 
     def free(self, i: int):
-        """Whether pair ``i`` keeps clear of the scene: True, False, or None when it is not
-        tested because the tests allowed are spent (or the test is off: True)."""
+        """Whether pair ``i`` passes the tests: True, False, or None when it is not tested
+        because the tests allowed are spent (or the test is off: True)."""
         if not self.on:
             return True
         if self.state[i] >= 0:
@@ -419,9 +423,15 @@ class CollisionCheck:
         tensor = det.tensor
         pose = tensor.pose(det.scene.points[det.pair_point[i]],
                            2 * np.pi * int(det.pair_orientation[i]) / det.settings.n_orientations)
-        depth = tensor.collision_depth
-        ok = det.scene.collider().separation(tensor.collision_body(), pose,
-                                             limit=depth) <= depth
+        collider = det.scene.collider()
+        through = tensor.through_body()
+        ok = through is None or collider.collides(through, pose)
+        if not ok:
+            self.failed_through += 1
+        for body, depth in tensor.collision_bodies() if ok else ():
+            if collider.separation(body, pose, limit=depth) > depth:
+                ok = False
+                break
         self.tests += 1
         self.state[i] = 0 if ok else 1
         if not ok:
@@ -438,6 +448,7 @@ class CollisionCheck:
         return {"collision_test": "on" if self.on else self.reason,
                 "collision_tests": self.tests,
                 "pairs_failing_collision": int((self.state == 1).sum()) if self.on else 0,
+                "pairs_with_nothing_through": self.failed_through,
                 "collision_tests_exhausted": self.exhausted}
 
 

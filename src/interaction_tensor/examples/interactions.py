@@ -388,24 +388,24 @@ def _rider_and_bike(rider: Geometry, seed: int):
 #: docs/results/tuning/.
 ACCEPTANCE: dict = {
     # precision and recall of the pair decisions on the validation pairs (tuning.md); the
-    # collision test (depth, above) of ranked placements chosen on the judge's labelled set:
-    # every valid pose kept, the most invalid ones rejected (scripts/choose_collision.py,
-    # docs/results/collision/choice.md)
+    # collision tests [(depth, above)] of ranked placements and the through test chosen on
+    # the judge's labelled set: every valid pose kept, the most invalid ones rejected
+    # (scripts/choose_collision.py, docs/results/collision/choice.md)
     "placing": dict(threshold=0.03, clearance_limit=0.05, interior_limit=0.02,
                     contact=("main", 0.02, 0.9, 90.0),            # 99.2 %, 95.0 %
-                    collision=(0.01, None)),                      # 30/76 invalid rejected
+                    collision=[(0.01, None)], through=False),     # 30/76 invalid rejected
     "sitting": dict(threshold=0.35, clearance_limit=0.02, interior_limit=0.02,
                     contact=("off", 0.02, 0.1, 90.0),             # 38.0 %, 73.3 % (*)
-                    collision=(0.05, None)),                      # 43/64
+                    collision=[(0.05, None)], through=False),     # 43/64
     "hanging": dict(threshold=0.14, clearance_limit=0.05, interior_limit=1.0,
                     contact=("main", 0.02, 0.75, 30.0),           # 45.2 %, 0.8 % (*)
-                    collision=(0.01, None)),                      # 67/90
+                    collision=[(0.01, None)], through=True),      # 90/90
     "filling": dict(threshold=0.575, clearance_limit=0.02, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),             # 100 %, 71.7 %
-                    collision=(0.01, None)),                      # 0/69 (none collide)
+                    collision=[(0.01, None)], through=True),      # 9/69 (support under it)
     "riding": dict(threshold=0.26, clearance_limit=0.10, interior_limit=1.0,
                    contact=("all", 0.10, 0.75, 90.0),             # 96.8 %, 67.5 %
-                   collision=(0.01, 0.0)),                        # 11/48: above the seat
+                   collision=[(0.01, 0.0)], through=False),       # 11/48: above the seat
 }
 # (*) estimates dominated by a few background pairs of large weight (one judged pair stands
 #     for up to 43,000): an earlier sample of the same rooms chose, for sitting, S_aff 0.22
