@@ -108,7 +108,8 @@ def test_point_clouds_and_descriptors_without_a_depth_skip_the_test(hanging):
     scene, top = _desk()
     cloud = it.prepare_scene(it.Geometry(scene.points, normals=scene.normals), 0.01)
     det = it.detect(cloud, tensor, it.DetectSettings(**OPEN), test_indices=top)
-    assert det.stats["collision_test"] == "off (the scene has no triangles)"
+    assert det.stats["collision_test"] == det.stats["through_test"] == \
+        "off (the scene has no triangles)"
     assert len(det.predictions) >= 2
     bare = interactions.build_descriptor("hanging-hanger", tuned=False)
     assert bare.collision_tests == () and bare.collision_bodies() == []
@@ -199,7 +200,7 @@ def test_detection_with_the_through_test_predicts_only_hooks_with_something_thro
     up = np.flatnonzero(scene.points[:, 2] > 1.55)
     det = it.detect(scene, tensor, it.DetectSettings(**{**OPEN, "top_k": 5}),
                     test_indices=up)
-    assert det.stats["pairs_with_nothing_through"] > 0
+    assert det.stats["through_test"] == "on" and det.stats["pairs_with_nothing_through"] > 0
     collider, body = MeshCollider(*scene.mesh), tensor.through_body()
     assert det.predictions and all(collider.collides(body, p.pose) for p in det.predictions)
     assert all(abs(p.position[0]) < 0.05 for p in det.predictions)     # on the rail
@@ -226,3 +227,23 @@ def test_suppression_with_a_test_picks_as_suppression_over_what_passes(seed, k, 
     stop = top_k(pos, score, k, radius, accept=lambda i: None if i == got[-1] else passes[i]) \
         if got else []
     assert stop == got[:-1]
+
+
+def test_the_through_section_is_empty_where_nothing_passes_through_the_query():
+    from interaction_tensor.collision import through_section
+
+    rng = np.random.default_rng(3)
+    ball = rng.normal(size=(400, 3))
+    ball = 0.05 * ball / np.linalg.norm(ball, axis=1, keepdims=True)      # a 5 cm sphere
+    floor = np.c_[rng.uniform(-0.3, 0.3, (2000, 2)), np.full(2000, -0.05)]
+    assert through_section(ball, floor, ball, 0.01, 0.0025).shape == (0, 3)   # beneath it
+    assert through_section(ball[:3], floor, ball, 0.01, 0.0025).shape == (0, 3)  # no hull
+    # a rod through the middle of a ring of points: the section is the ring's opening
+    t = rng.uniform(0, 2 * np.pi, 2000)
+    ring = np.c_[0.05 * np.cos(t), rng.uniform(-0.003, 0.003, 2000), 0.05 * np.sin(t)]
+    rod = np.c_[0.01 * np.cos(t), rng.uniform(-0.3, 0.3, 2000), 0.01 * np.sin(t)]
+    section = through_section(ring, rod, ring, 0.01, 0.0025)
+    assert len(section) >= 3
+    assert np.abs(section[:, 1]).max() < 0.003                      # across the rod
+    r = np.linalg.norm(section[:, [0, 2]], axis=1)
+    assert 0.015 < r.min() and r.max() <= 0.0215           # the rod + 1 cm (1 mm cells), in the ring

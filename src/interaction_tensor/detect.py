@@ -402,6 +402,11 @@ class CollisionCheck:
         elif not tensor.collision_bodies() and tensor.through_body() is None:
             self.reason = "off (no query triangles to test)"
         self.on = self.reason is None
+        self.through = ("on" if tensor.through_body() is not None else
+                        "off (the example had nothing through the query)") if tensor.through \
+            else "off (the descriptor does not ask for it)"
+        if not self.on:
+            self.through = self.reason
         self.state = np.full(len(det.pair_point), -1, np.int8) if self.on else None
         self.tests = 0
         self.failed_through = 0
@@ -448,6 +453,7 @@ class CollisionCheck:
         return {"collision_test": "on" if self.on else self.reason,
                 "collision_tests": self.tests,
                 "pairs_failing_collision": int((self.state == 1).sum()) if self.on else 0,
+                "through_test": self.through,
                 "pairs_with_nothing_through": self.failed_through,
                 "collision_tests_exhausted": self.exhausted}
 

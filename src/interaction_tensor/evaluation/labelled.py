@@ -142,6 +142,12 @@ def _validation_poses(ex, name, vs, jscene) -> list:
             fwd = max(0.0, back + 0.03 - s.width if math.isfinite(s.width) else 0.0,
                       front + 0.01 - calves)
             add(site_pose(ex, s.point, a, fwd * f), True, "seat", s.note)
+            gap = s.width + fwd - back               # the back to the backrest
+            if gap < 0.035:
+                # a chair whose backrest, not the seat's depth, set where the person sits:
+                # the back 3.5 cm into the backrest, the legs as free as on the seat
+                add(site_pose(ex, s.point, a, (fwd - gap - 0.035) * f), False,
+                    "leaning 3.5 cm into the backrest", s.note)
             if i % 2 == 0:
                 add(site_pose(ex, s.point, a, fwd * f + [0, 0, -0.10]), False,
                     "sunk 10 cm into the seat", s.note)

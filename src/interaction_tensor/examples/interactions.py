@@ -396,7 +396,8 @@ ACCEPTANCE: dict = {
                     collision=[(0.01, None)], through=False),     # 30/76 invalid rejected
     "sitting": dict(threshold=0.35, clearance_limit=0.02, interior_limit=0.02,
                     contact=("off", 0.02, 0.1, 90.0),             # 38.0 %, 73.3 % (*)
-                    collision=[(0.05, None)], through=False),     # 43/64
+                    collision=[(0.05, None), (0.01, 0.0)],        # 50/71: the whole body
+                    through=False),                               # 5 cm, above the seat 1 cm
     "hanging": dict(threshold=0.14, clearance_limit=0.05, interior_limit=1.0,
                     contact=("main", 0.02, 0.75, 30.0),           # 45.2 %, 0.8 % (*)
                     collision=[(0.01, None)], through=True),      # 90/90
