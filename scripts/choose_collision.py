@@ -31,7 +31,7 @@ from interaction_tensor.examples import interactions, validation
 from interaction_tensor.io import load_geometry
 
 ABOVE = (None, 0.0, 0.05, 0.10)
-DEPTHS = (0.01, 0.02, 0.05)
+DEPTHS = (0.01, 0.02, 0.05, 0.1, 0.2)
 AFFORDANCES = ("placing", "sitting", "hanging", "filling", "riding")
 
 
