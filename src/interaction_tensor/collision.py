@@ -170,8 +170,9 @@ def through_section(query_vertices: np.ndarray, scene_points: np.ndarray,
     plane, less what lies within ``gap`` (m) of the query's surface: the opening of the hook
     around the rail, short of the wire. A surface that only touches the hook where it rests
     (a flat top under the hook) does not reach it; a rail, peg or panel edge through the
-    hook crosses it. Detection poses the polygon and asks the scene's triangles to cross it
-    (:class:`~.detect.CollisionCheck`).
+    hook crosses it. The region is found on a grid of ``cell`` (m; coarser for a section
+    over 20 cm across: 200 cells at most). Detection poses the polygon and asks the scene's
+    triangles to cross it (:class:`~.detect.CollisionCheck`).
     """
     from scipy import ndimage
     from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
@@ -179,7 +180,7 @@ def through_section(query_vertices: np.ndarray, scene_points: np.ndarray,
     empty = np.zeros((0, 3))
     q = np.asarray(query_vertices, float)
     pts = np.asarray(scene_points, float)
-    if len(q) < 4 or len(pts) < min_points:
+    if len(q) < 4 or len(pts) < min_points or len(query_points) == 0:
         return empty
     try:
         hull = Delaunay(q[ConvexHull(q).vertices])
@@ -197,12 +198,16 @@ def through_section(query_vertices: np.ndarray, scene_points: np.ndarray,
     w = np.cross(axis, u)
     flat = np.c_[(inside - centre) @ u, (inside - centre) @ w]
     lo, hi = flat.min(axis=0) - margin, flat.max(axis=0) + margin
+    cell = max(cell, float((hi - lo).max()) / 200)          # at most 200 cells across
     gu, gw = (np.arange(lo[k], hi[k] + cell, cell) for k in (0, 1))
     grid = np.stack(np.meshgrid(gu, gw, indexing="ij"), -1).reshape(-1, 2)
     near_t, _ = cKDTree(flat).query(grid, distance_upper_bound=margin + cell)
-    lifted = centre + grid[:, :1] * u + grid[:, 1:] * w
-    clear, _ = cKDTree(np.asarray(query_points, float)).query(lifted)
-    keep = (np.isfinite(near_t) & (clear >= gap)).reshape(len(gu), len(gw))
+    keep = np.isfinite(near_t)
+    lifted = centre + grid[keep, :1] * u + grid[keep, 1:] * w
+    touching, _ = cKDTree(np.asarray(query_points, float)).query(lifted,
+                                                                 distance_upper_bound=gap)
+    keep[keep] = ~np.isfinite(touching)                  # no query sample within ``gap``
+    keep = keep.reshape(len(gu), len(gw))
     # the opening itself: the free cells connected to the middle of the scene-object's
     # section, not the inside of the hook's wire beyond it
     parts, _ = ndimage.label(keep)

@@ -799,35 +799,51 @@ def validate_descriptor(path, header: dict, arrays: dict):
     return header, out
 
 
-#: Samples of the scene-object in the query's box that :func:`_through_section` looks at.
-THROUGH_SAMPLES = 100_000
+#: Samples of the scene-object in the query's box, and of the query near them, that
+#: :func:`_through_section` looks at.
+THROUGH_SAMPLES = 40_000
 #: How far (in training spacings) the through section keeps from the query's surface: a
 #: surface that touches the hook only where it rests does not reach the section.
 THROUGH_GAP = 0.25
 
 
+def _faces_in_box(g: Geometry, lo, hi) -> np.ndarray:
+    """(F,) bool: the faces of mesh ``g`` whose bounding boxes meet the box ``lo``-``hi``."""
+    tri = g.vertices[g.faces]
+    return ((tri.max(axis=1) >= lo) & (tri.min(axis=1) <= hi)).all(axis=1)
+
+
 def _through_section(query: Geometry, scene_object: Geometry, settings: TrainSettings):
     """Where the scene-object passes through the query (:func:`.collision.through_section`),
-    from dense samples of the scene-object in the query's box and of the query (a hook's
-    inside is a few millimetres thick: the detection spacing would miss it): the opening
-    widened by the training spacing, kept :data:`THROUGH_GAP` spacings from the query's surface."""
+    from dense samples of the scene-object in the query's box and of the query around them
+    (a hook's inside is a few millimetres thick: the detection spacing would miss it): the
+    opening widened by the training spacing, kept :data:`THROUGH_GAP` spacings from the
+    query's surface."""
     from .collision import through_section
 
-    lo = query.vertices.min(axis=0) - settings.scene_spacing
-    hi = query.vertices.max(axis=0) + settings.scene_spacing
+    s = settings.scene_spacing
+    lo, hi = query.vertices.min(axis=0) - s, query.vertices.max(axis=0) + s
     if scene_object.is_mesh:
-        tri = scene_object.vertices[scene_object.faces]
-        mask = ((tri.max(axis=1) >= lo) & (tri.min(axis=1) <= hi)).all(axis=1)
+        mask = _faces_in_box(scene_object, lo, hi)
         if not mask.any():
             return np.zeros((0, 3))
+        # the faces' samples beyond the box too: they show which way the rail runs
         pts, _ = sample_mesh(scene_object, THROUGH_SAMPLES, settings.seed + 8, face_mask=mask)
     else:
         v = scene_object.vertices
         pts = v[((v >= lo) & (v <= hi)).all(axis=1)]
-    q_pts = sample_mesh(query, THROUGH_SAMPLES, settings.seed + 9)[0] if query.is_mesh \
-        else query.vertices
-    return through_section(query.vertices, pts, q_pts, settings.scene_spacing,
-                           THROUGH_GAP * settings.scene_spacing)
+    if len(pts) == 0:
+        return np.zeros((0, 3))
+    if query.is_mesh:       # the query where the scene-object is, sampled as densely
+        near = pts[((pts >= lo) & (pts <= hi)).all(axis=1)]
+        if len(near) == 0:
+            return np.zeros((0, 3))
+        q_mask = _faces_in_box(query, near.min(axis=0) - 2 * s, near.max(axis=0) + 2 * s)
+        q_pts = sample_mesh(query, THROUGH_SAMPLES, settings.seed + 9, face_mask=q_mask)[0] \
+            if q_mask.any() else np.zeros((0, 3))
+    else:
+        q_pts = query.vertices
+    return through_section(query.vertices, pts, q_pts, s, THROUGH_GAP * s)
 
 
 def _scene_object_samples(scene_object: Geometry, centre, crop: float, spacing: float, seed):

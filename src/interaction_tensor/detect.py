@@ -402,11 +402,14 @@ class CollisionCheck:
         elif not tensor.collision_bodies() and tensor.through_body() is None:
             self.reason = "off (no query triangles to test)"
         self.on = self.reason is None
-        self.through = ("on" if tensor.through_body() is not None else
-                        "off (the example had nothing through the query)") if tensor.through \
-            else "off (the descriptor does not ask for it)"
         if not self.on:
             self.through = self.reason
+        elif not tensor.through:
+            self.through = "off (the descriptor does not ask for it)"
+        elif tensor.through_body() is None:
+            self.through = "off (the example had nothing through the query)"
+        else:
+            self.through = "on"
         self.state = np.full(len(det.pair_point), -1, np.int8) if self.on else None
         self.tests = 0
         self.failed_through = 0
