@@ -83,13 +83,14 @@ def main(argv=None) -> int:
                  else validation.build_scene(p.scene.split(":", 1)[1]).geometry)
             colliders[p.scene] = collision.MeshCollider(g.vertices, g.faces)
         if p.example not in examples:
-            ex = interactions.build(p.example, args.objects)
+            # the triangles and heights detection tests: the descriptor's own (its reference
+            # point is the support for all but filling, whose is the tap's outlet)
             tensor = interactions.build_descriptor(p.example, args.objects)
-            v, f = ex.query.vertices, ex.query.faces
+            v, f = tensor.query_vertices, tensor.query_faces
             bodies = {}
             for above in ABOVE:
                 faces = collision.faces_above(v, f, None if above is None
-                                              else ex.support_point[2] + above)
+                                              else tensor.reference_point[2] + above)
                 if len(faces):                  # nothing of a bowl lies above its support
                     bodies[above] = collision.Body(v, faces)
             section = tensor.through_section

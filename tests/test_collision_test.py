@@ -136,7 +136,7 @@ def test_the_collision_setting_survives_a_file_and_a_bad_one_is_refused(hanging,
         assert it.InteractionTensor.load(tensor.save(tmp_path / "o.npz")).collision_tests == ()
     finally:
         tensor.set_acceptance(tensor.threshold(), collision=[(0.01, None)])
-    for wrong in ((-0.01, None), [(0.01, None), (0.01,)], "on", (0.01, "high")):
+    for wrong in ((-0.01, None), [(0.01, None), (0.01,)], "on", (0.01, "high"), 0.01):
         with pytest.raises(ValueError):
             tensor.set_acceptance(tensor.threshold(), collision=wrong)
     import json

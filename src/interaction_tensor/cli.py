@@ -231,7 +231,7 @@ def _report(args, result, outdir) -> None:
         spent = " (the tests allowed are spent: fewer predictions)" \
             if st["collision_tests_exhausted"] else ""
         through = f", {st['pairs_with_nothing_through']} of them with nothing through the " \
-            "hook" if result.tensor.through else ""
+            "hook" if st["through_test"] == "on" else ""
         _say(args, f"collision test of the top predictions: {st['collision_tests']} tested, "
                    f"{st['pairs_failing_collision']} failing{through}{spent} in "
                    f"{st['seconds'].get('collision', 0):.2f} s")

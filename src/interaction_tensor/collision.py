@@ -139,10 +139,7 @@ def disk(centre, radius: float, axis, sections: int = 24):
     w = np.cross(axis, u)
     t = 2 * np.pi * np.arange(sections) / sections
     rim = np.asarray(centre, float) + radius * (np.cos(t)[:, None] * u + np.sin(t)[:, None] * w)
-    v = np.vstack([centre, rim])
-    i = np.arange(sections)
-    front = np.c_[np.zeros(sections, int), 1 + i, 1 + (i + 1) % sections]
-    return v, np.vstack([front, front[:, [0, 2, 1]]])
+    return polygon(rim, centre)
 
 
 def box(lo, hi):
@@ -224,12 +221,12 @@ def through_section(query_vertices: np.ndarray, scene_points: np.ndarray,
     return centre + grid[ring, :1] * u + grid[ring, 1:] * w
 
 
-def polygon(vertices: np.ndarray):
-    """A flat convex polygon as a closed body (two triangle fans about its centroid, back to
-    back): (V, 3) vertices, (F, 3) faces."""
+def polygon(vertices: np.ndarray, centre=None):
+    """A flat convex polygon as a closed body (two triangle fans about ``centre``, by default
+    its vertices' mean, back to back): (V, 3) vertices, (F, 3) faces."""
     ring = np.asarray(vertices, float)
     n = len(ring)
-    v = np.vstack([ring.mean(axis=0), ring])
+    v = np.vstack([ring.mean(axis=0) if centre is None else np.asarray(centre, float), ring])
     i = np.arange(n)
     front = np.c_[np.zeros(n, int), 1 + i, 1 + (i + 1) % n]
     return v, np.vstack([front, front[:, [0, 2, 1]]])

@@ -829,9 +829,9 @@ def _through_section(query: Geometry, scene_object: Geometry, settings: TrainSet
             return np.zeros((0, 3))
         # the faces' samples beyond the box too: they show which way the rail runs
         pts, _ = sample_mesh(scene_object, THROUGH_SAMPLES, settings.seed + 8, face_mask=mask)
-    else:
-        v = scene_object.vertices
-        pts = v[((v >= lo) & (v <= hi)).all(axis=1)]
+    else:                   # a cloud: its points around the box too, for the same reason
+        v, reach = scene_object.vertices, float(np.linalg.norm(hi - lo))
+        pts = v[((v >= lo - reach) & (v <= hi + reach)).all(axis=1)]
     if len(pts) == 0:
         return np.zeros((0, 3))
     if query.is_mesh:       # the query where the scene-object is, sampled as densely
@@ -1007,7 +1007,10 @@ def _contact_groups(q_pts, q_gap, q_normal, ground, reference, settings: TrainSe
 def collision_tests(value) -> tuple:
     """Detection's collision tests from (depth, above) or a list of them, checked: depth in
     [0, 1] m, above None or a height in [-10, 10] m. Raises ValueError."""
-    items = list(value) if not isinstance(value, (str, bytes)) else None
+    try:
+        items = list(value) if not isinstance(value, (str, bytes)) else None
+    except TypeError:                              # a number, None, ...
+        items = None
     if items and not isinstance(items[0], (list, tuple)):
         items = [items]                            # one (depth, above)
     if items is None:
