@@ -259,8 +259,19 @@ def test_default_detection_keeps_the_papers_partial_scores(corner_tensor):
     assert not np.allclose(adaptive.pairs.score[rej], ref.score[rej])
 
 
+def _torch_devices():
+    """``cpu`` always; ``cuda`` where PyTorch sees a GPU (run on a lent GPU machine)."""
+    try:
+        import torch
+        cuda = torch.cuda.is_available()
+    except ImportError:
+        cuda = False
+    return ["cpu", pytest.param("cuda", marks=pytest.mark.skipif(not cuda, reason="no CUDA"))]
+
+
+@pytest.mark.parametrize("device", _torch_devices())
 @pytest.mark.parametrize("criterion", ["paper", "gaussian"])
-def test_torch_backend_decides_like_the_cpu_paths(corner_tensor, scored_setup, criterion):
+def test_torch_backend_decides_like_the_cpu_paths(corner_tensor, scored_setup, criterion, device):
     torch = pytest.importorskip("torch")
     from interaction_tensor.torch_backend import TorchIndex, score_pairs_torch
     scene, pp, po = scored_setup
@@ -271,32 +282,41 @@ def test_torch_backend_decides_like_the_cpu_paths(corner_tensor, scored_setup, c
     ref = score_pairs(scene.points[pp], po, table, scene, thr)
     assert 0 < ref.accepted.sum() < len(pp)
     # small tiles so that many queries fall back to the tree and tiles border each other
-    index = TorchIndex(scene, "cpu", tile=0.15, margin=0.03)
-    got = score_pairs_torch(scene.points[pp], po, table, index, thr, pairs_per_block=500)
-    np.testing.assert_array_equal(got.accepted, ref.accepted)
-    np.testing.assert_array_equal(got.decided_at, ref.decided_at)
-    np.testing.assert_allclose(got.score, ref.score, atol=1e-9)
+    index = TorchIndex(scene, device, tile=0.15, margin=0.03)
+    for spatial in (True, False):      # blocks in tile order and in the caller's order
+        got = score_pairs_torch(scene.points[pp], po, table, index, thr, pairs_per_block=500,
+                                spatial_order=spatial)
+        np.testing.assert_array_equal(got.accepted, ref.accepted)
+        np.testing.assert_array_equal(got.decided_at, ref.decided_at)
+        np.testing.assert_allclose(got.score, ref.score, atol=1e-9)
     # the tiled nearest neighbour is exact, inside and outside the scene's box
     rng = np.random.default_rng(3)
     lo, hi = scene.points.min(0) - 0.2, scene.points.max(0) + 0.2
     q = rng.uniform(lo, hi, (4000, 3))
-    nn = index.nearest(torch.as_tensor(q)).numpy()
     d_ref = scene.tree.query(q)[0]
-    np.testing.assert_allclose(np.linalg.norm(scene.points[nn] - q, axis=1), d_ref, atol=1e-12)
+    asked = {}
+    for levels in (1, 2):       # the coarser level proves on the device what the tree did
+        index = TorchIndex(scene, device, tile=0.15, margin=0.03, levels=levels)
+        nn = index.nearest(torch.as_tensor(q, device=device)).cpu().numpy()
+        np.testing.assert_allclose(np.linalg.norm(scene.points[nn] - q, axis=1), d_ref,
+                                   atol=1e-12)
+        asked[levels] = index.tree_queries
+    assert 0 < asked[2] < asked[1] < len(q)
 
 
-def test_torch_backend_detection_matches_numba(corner_tensor):
+@pytest.mark.parametrize("device", _torch_devices())
+def test_torch_backend_detection_matches_numba(corner_tensor, device):
     pytest.importorskip("torch")
     scene_geometry, _ = moved_corner_scene(1.0, np.array([0.2, 0.1, 0.0]))
     scene = it.prepare_scene(scene_geometry, 0.01, seed=1)
     a = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.015, backend="torch",
-                                                          device="cpu"))
+                                                          device=device))
     b = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.015, backend="numba"))
     assert a.pairs.accepted.any()
     np.testing.assert_array_equal(a.pairs.accepted, b.pairs.accepted)
     np.testing.assert_array_equal(a.pairs.decided_at, b.pairs.decided_at)
     assert [p.point_index for p in a.predictions] == [p.point_index for p in b.predictions]
-    assert a.stats["backend"] == "torch" and a.stats["device"] == "cpu"
+    assert a.stats["backend"] == "torch" and a.stats["device"] == device
 
 
 def test_torch_backend_asks_for_a_cuda_device_it_does_not_have(corner_tensor):
