@@ -33,7 +33,7 @@ def test_the_set_has_20_valid_and_20_invalid_poses_per_affordance(poses):
     cases = {p.case for p in poses if not p.valid}
     for needle in ("hook on a flat top", "sunk 10 cm into the seat", "half off the edge",
                    "on a top with no tap above", "hovering", "through the wall",
-                   "under a bar, not in a basin"):
+                   "under a bar, not in a basin", "star base"):
         assert any(needle in c for c in cases), needle
 
 
@@ -52,6 +52,30 @@ def test_the_bar_traps_have_a_tap_like_bar_above_and_no_basin(poses):
         assert v.overhead and not v.valid
         assert len(v.reasons) == 1 and v.reasons[0].startswith("not in a basin"), v.reasons
     assert "judge_traps" not in validation.scene_names()        # never tuned on
+
+
+def test_a_hook_on_a_star_base_hangs_below_the_floor_line_of_a_floorless_scan(poses):
+    """The hangers hooked round an office chair's star-base legs (no floor in the scan, as in
+    the published office scans) fail the ground test alone; hangers on a rail in the same
+    floorless scan pass it."""
+    from interaction_tensor.evaluation.judge import Judge, JudgeScene
+    from interaction_tensor.examples import interactions, validation
+
+    traps = [p for p in poses if p.scene == "validation:floorless_traps"]
+    judge = Judge.for_example(interactions.build("hanging-hanger", _objects()))
+    scene = JudgeScene(validation.build_scene("floorless_traps").geometry)
+    hooks = [p for p in traps if not p.valid]
+    rails = [p for p in traps if p.valid]
+    assert len(hooks) == 5 and len(rails) >= 3
+    for p in hooks:
+        v = judge.judge(scene, np.asarray(p.pose))
+        assert v.loop and v.contact == 1.0, v.reasons            # hooked round the leg
+        assert v.reasons == [f"hangs {v.below_ground * 100:.0f} cm below the ground"]
+        assert 0.05 < v.below_ground < 0.12
+    for p in rails:
+        v = judge.judge(scene, np.asarray(p.pose))
+        assert v.valid and v.below_ground < -1.0, v.reasons
+    assert "floorless_traps" not in validation.scene_names()     # never tuned on
 
 
 def test_the_judge_is_right_on_95_percent_of_each_class(poses):

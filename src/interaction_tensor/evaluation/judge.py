@@ -47,12 +47,17 @@ Tests, by affordance (``tests`` in :data:`TESTS`):
 5. **Through the loop** (hanging). The hook's (the strap's) inner disk must be crossed by the
    scene: the rail, peg, door top or panel edge passes through the loop, so the object hangs
    from it. A hanger standing on a flat top or beside an edge fails.
-6. **Feet within reach** (sitting; a rider's feet may dangle, as on a vaulting horse). Under each foot the highest scene surface not above
+6. **Above the ground** (hanging). The hanging object's lowest point is at most
+   ``below_ground`` = 1 cm below the ground: the lowest scene point within 1.5 m. Where the
+   scan has a floor, hanging through it is test 1's business; the published office scans
+   have none, and a hook round an office chair's star-base leg, 8-10 cm above where the
+   floor is, passed every other test with the hanger 8 cm below the casters.
+7. **Feet within reach** (sitting; a rider's feet may dangle, as on a vaulting horse). Under each foot the highest scene surface not above
    the sole (or, with nothing under it, the ground: the lowest scene point within 1.5 m; feet
    sunk into a floor are test 1's business) is at most
    ``feet_reach`` = 25 cm below the sole: a bar stool passes, a table top or a counter does
    not.
-7. **Astride** (riding). The scene's surface goes on between the legs ahead of the seat:
+8. **Astride** (riding). The scene's surface goes on between the legs ahead of the seat:
    scene samples in a box 3 cm either side of the body's mid-plane, from 12 to 32 cm ahead of
    the seat point, from 30 cm below to 2 cm above the seat (a motorbike's tank, a bench or a
    sofa arm going on between the knees; not a bench crossed sideways). And there is room for
@@ -80,7 +85,7 @@ from .. import collision
 TESTS = {
     "placing": ("penetration", "contact", "support"),
     "filling": ("penetration", "contact", "support", "overhead", "basin"),
-    "hanging": ("penetration", "contact", "loop"),
+    "hanging": ("penetration", "contact", "loop", "ground"),
     "sitting": ("penetration", "contact", "support", "feet"),
     "riding": ("penetration", "contact", "astride", "legroom"),
 }
@@ -121,6 +126,7 @@ class JudgeSettings:
     basin_height: tuple = (0.02, 0.0)          # above the support, above the rim
     basin_sectors: int = 5                     # of 8
     loop_fraction: float = 0.85
+    below_ground: float = 0.01
     feet_reach: float = 0.25
     ground_radius: float = 1.5
     astride_ahead: tuple = (0.12, 0.32)
@@ -149,6 +155,7 @@ class Verdict:
     basin: int | None = None
     loop: bool | None = None
     feet_gap: float | None = None
+    below_ground: float | None = None
     astride: bool | None = None
     legroom: bool | None = None
     reasons: list = field(default_factory=list)
@@ -159,7 +166,7 @@ class Verdict:
         return {"valid": bool(self.valid), "penetration_m": r(self.penetration),
                 "contact": r(self.contact, 3), "support_margin_m": r(self.support_margin),
                 "overhead": self.overhead, "basin_sectors": self.basin, "loop": self.loop,
-                "feet_gap_m": r(self.feet_gap),
+                "feet_gap_m": r(self.feet_gap), "below_ground_m": r(self.below_ground),
                 "astride": self.astride, "legroom": self.legroom,
                 "reasons": list(self.reasons)}
 
@@ -378,6 +385,12 @@ class Judge:
             verdict.loop = scene.collider.collides(self.loop_body, pose)
             if not verdict.loop:
                 reasons.append("nothing passes through the hook")
+        if "ground" in self.tests:
+            lowest = float(moved(self.samples)[:, 2].min())
+            ground = scene.ground_level(com, st.ground_radius + self.radius)
+            verdict.below_ground = ground - lowest
+            if verdict.below_ground > st.below_ground:
+                reasons.append(f"hangs {verdict.below_ground * 100:.0f} cm below the ground")
         if "feet" in self.tests:
             gap = self._feet_gap(scene, [moved(f) for f in self.feet], com)
             verdict.feet_gap = gap

@@ -256,6 +256,21 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
                 out.append(_entry(ex, "validation:judge_traps", site_pose(ex, point, angle),
                                   False, "under a bar, not in a basin", note))
         log(f"judge_traps: {len(out)} poses so far")
+        # a hook round an office chair's star-base leg in a scan without its floor: the
+        # hanger hangs through where the floor is (fooled the judge in office-desk6); and
+        # hangers on a clothes rail in the same floorless scan, which hang free
+        ex = examples["hanging"]
+        vs = validation.build_scene("floorless_traps")
+        for point, d, note in validation.star_base_hooks(vs):
+            angle = math.atan2(d[1], d[0]) - math.pi / 2        # the support along its +y
+            out.append(_entry(ex, "validation:floorless_traps", site_pose(ex, point, angle),
+                              False, "hook on a chair's star base, hanging through the floor "
+                              "line of a floorless scan", note))
+        for i, s in enumerate(x for x in vs.sites if x.kind == "hang"):
+            a = facing_angle(ex, s.facing) + (math.pi if i % 2 else 0.0)
+            out.append(_entry(ex, "validation:floorless_traps", site_pose(ex, s.point, a), True,
+                              "hook over a rail in a floorless scan", s.note))
+        log(f"floorless_traps: {len(out)} poses so far")
     if shared_dir is not None:
         for aff, scene, point, angle, valid, case, note in HAND_POSED:
             ex = examples[aff]

@@ -224,6 +224,32 @@ def _judge_traps():
     return _shell((3.0, 3.4)), [table, counter]
 
 
+def _floorless_traps():
+    """Not a validation room: a scan without its floor, as the published office scans are.
+    An office chair, whose star base a hook can go round 8-10 cm above where the floor would
+    be (a hanger there hangs through the floor), and a clothes rail standing on its feet (a
+    hanger on its bar hangs free: the control). :func:`star_base_hooks` lists the hooks."""
+    return [], [F.office_chair((1.0, 1.0), 0, seat="round", name="office chair"),
+                F.clothes_rail((2.4, 1.0), 0, height=1.7, length=1.0, radius=0.015,
+                               name="clothes rail")]
+
+
+def star_base_hooks(scene: "ValidationScene", radius: float = 0.2) -> list:
+    """Where a hook goes round each leg of the office chair of :func:`_floorless_traps`:
+    [(point on the leg's top (3,), the leg's horizontal direction (2,), note)], the point
+    found by casting a ray down onto the scene ``radius`` (m) out from the column."""
+    tri = scene.geometry.vertices[scene.geometry.faces]
+    low = tri[tri[:, :, 2].max(axis=1) < 0.2]          # the base, not the seat above it
+    out = []
+    for i in range(5):
+        a = 2 * math.pi * i / 5 + math.pi / 10
+        d = np.array([math.cos(a), math.sin(a)])
+        xy = np.array([1.0, 1.0]) + radius * d
+        t = _ray_hits(low, np.array([[xy[0], xy[1], 0.2]]), np.array([0.0, 0.0, -1.0]))
+        out.append((np.r_[xy, 0.2 - t.min()], d, f"office chair star-base leg {i + 1}"))
+    return out
+
+
 #: Judge traps (:func:`_judge_traps`): (support point under the bar, note).
 JUDGE_TRAPS = [((1.3 + x, 1.2, 0.0), f"floor under the stretcher, x {x:+.1f}")
                for x in (-0.3, 0.0, 0.25)] + \
@@ -234,7 +260,7 @@ _SCENES = {"living_a": _living_a, "living_b": _living_b, "kitchen_a": _kitchen_a
            "kitchen_b": _kitchen_b, "office_a": _office_a, "office_nofloor": _office_nofloor,
            "garage": _garage}
 #: Scenes for proving the judge only, never for tuning.
-_JUDGE_ONLY = {"judge_traps": _judge_traps}
+_JUDGE_ONLY = {"judge_traps": _judge_traps, "floorless_traps": _floorless_traps}
 
 
 def scene_names() -> list[str]:
