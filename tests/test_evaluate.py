@@ -173,6 +173,42 @@ def test_evaluate_merge_equals_one_run(tmp_path, capsys):
     assert info["seed"] == "differs per part (see per_part)"
 
 
+def test_evaluate_rejudge_restores_the_verdicts_of_the_current_judge(tmp_path, capsys):
+    """A finished run judged again: with the same judge the files are the run's; a verdict
+    tampered with is judged again (and its picture drawn again), the table follows it."""
+    from interaction_tensor.cli import main
+
+    scene = shared_file("scenes/office-desk1.ply")
+    run = tmp_path / "run"
+    assert main(["evaluate", "--scenes", str(scene), "-o", str(run), "--examples",
+                 "placing-bowl", "--test-points", "300", "--methods", "iT-weighted",
+                 "--seed", "0", "--quiet", "--no-judge-check"]) == 0
+    path = run / "judgements.csv"
+    rows = list(csv.DictReader(open(path)))
+    i = next(k for k, r in enumerate(rows) if r["group"] == "top")
+    rows[i]["valid"] = str(rows[i]["valid"] != "True")        # the verdict of another judge
+    with open(path, "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(rows[0]))
+        w.writeheader()
+        w.writerows(rows)
+    picture = run / "pictures" / "placing-bowl__office-desk1.png"
+    picture.write_bytes(b"stale")
+    out = tmp_path / "again"
+    assert main(["evaluate-rejudge", str(run), "-o", str(out), "--scenes",
+                 str(scene.parent), "--no-judge-check", "--quiet"]) == 0
+    again = list(csv.DictReader(open(out / "judgements.csv")))
+    assert again[i]["valid"] != rows[i]["valid"]                # restored
+    assert [r["valid"] for k, r in enumerate(again) if k != i] == \
+        [r["valid"] for k, r in enumerate(rows) if k != i]
+    assert (out / "pictures" / picture.name).read_bytes()[:4] == b"\x89PNG"   # drawn again
+    info = json.loads((out / "run.json").read_text())
+    assert info["settings"]["rejudged_from"] == str(run)
+    # a scene directory without the run's scene: one clear error, nothing written
+    assert main(["evaluate-rejudge", str(run), "-o", str(tmp_path / "x"), "--scenes",
+                 str(tmp_path), "--quiet"]) != 0
+    assert "office-desk1" in capsys.readouterr().err and not (tmp_path / "x").exists()
+
+
 def test_atomic_dir_keeps_the_earlier_result_on_failure(tmp_path):
     from interaction_tensor.errors import InputError
     from interaction_tensor.io import atomic_dir

@@ -135,6 +135,21 @@ def cmd_evaluate_merge(args) -> int:
     return 0
 
 
+def cmd_evaluate_rejudge(args) -> int:
+    from .evaluation.merge import rejudge
+    from .evaluation.report import judge_markdown, table_markdown
+
+    log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
+    res = rejudge(args.run, args.output, args.scenes, args.objects,
+                  tuple(args.affordances) if args.affordances else None,
+                  judge_check=not args.no_judge_check, log=log)
+    if not args.quiet:
+        print(table_markdown(res.table, tuple(res.settings.get("methods") or ())))
+        if res.judge_accuracy:
+            print("\nThe judge on its labelled poses:\n" + judge_markdown(res.judge_accuracy))
+    return 0
+
+
 def register(sub) -> None:
     """Add ``examples`` and ``evaluate`` to the ``itensor`` subparsers."""
     p = sub.add_parser("examples", help="the paper's 8 interaction examples")
@@ -189,6 +204,22 @@ def register(sub) -> None:
     seed_option(p)
     quiet_option(p)
     p.set_defaults(func=cmd_evaluate)
+
+    p = sub.add_parser("evaluate-rejudge",
+                       help="judge a finished `itensor evaluate` run again with the current "
+                            "judge (no detection): new verdicts, tables and pictures")
+    p.add_argument("run", help="output directory of the run")
+    p.add_argument("-o", "--output", required=True, help="output directory")
+    p.add_argument("--scenes", required=True, help="directory of the run's scene files")
+    p.add_argument("--objects", default=None,
+                   help="directory of the real query objects (default: the run's own)")
+    p.add_argument("--affordances", nargs="+", default=None,
+                   choices=("placing", "sitting", "filling", "riding", "hanging"),
+                   help="judge only these affordances' poses again (default: all)")
+    p.add_argument("--no-judge-check", action="store_true",
+                   help="keep the run's labelled-set accuracy instead of measuring it again")
+    quiet_option(p)
+    p.set_defaults(func=cmd_evaluate_rejudge)
 
     p = sub.add_parser("evaluate-merge",
                        help="merge `itensor evaluate` runs made on disjoint scene subsets "

@@ -1,4 +1,5 @@
-"""Merge evaluation runs made on disjoint sets of scenes into one Table 1.
+"""Merge evaluation runs made on disjoint sets of scenes into one Table 1; judge a finished
+run again with the current judge.
 
 ``itensor evaluate`` on a long list of scenes can be split across processes or machines (one
 ``--scenes`` subset each, same settings and seed); ``itensor evaluate-merge A B ... -o OUT``
@@ -212,4 +213,78 @@ def merge(directories, out_dir, log=print, allow=(), replace: bool = False) -> "
     log(f"merged {len(dirs)} runs{' (later ones replacing methods)' if replace else ''} "
         f"({len(res.settings['scenes'])} scenes, "
         f"{len(res.judgements)} judgements) into {out_dir}")
+    return res
+
+
+def rejudge(directory, out_dir, scenes_dir, objects_dir=None, affordances=None,
+            judge_check: bool = True, log=print) -> "EvalResult":
+    """Judge every pose of the finished run in ``directory`` again with the current judge
+    (every method's top and bottom poses; only ``affordances`` when given), and write the
+    run's files to ``out_dir`` with the new verdicts: the tables recomputed, the pictures of
+    the (scene, example) pairs whose verdicts changed drawn again, the others copied, and the
+    judge's labelled-set accuracy measured again (unless ``judge_check`` is False). Nothing is
+    detected again: the poses, scores and acceptances are the run's. ``out_dir`` is replaced
+    only when complete. ``run.json`` records ``rejudged_from``."""
+    from ..examples import interactions
+    from ..io import atomic_dir, load_geometry
+    from .judge import Judge, JudgeScene, JudgeSettings
+    from .pictures import run_sheet
+    from .report import write_all
+    from .runner import METHODS, metrics
+
+    d = Path(directory)
+    res = load_run(d)
+    st = res.settings
+    objects_dir = objects_dir or st.get("objects_dir")
+    spacing, seed = float(st.get("judge_spacing", 0.01)), int(st.get("seed", 0))
+    scenes_dir = Path(scenes_dir)
+    todo = [r for r in res.judgements if affordances is None or r["affordance"] in affordances]
+    judges, changed = {}, set()
+    for scene in sorted({r["scene"] for r in todo}):
+        path = scenes_dir / f"{scene}.ply"
+        if not path.is_file():
+            raise InputError(path, f"scene {scene!r} of {d} not found in {scenes_dir}")
+        geom = load_geometry(path)
+        jscene = JudgeScene(geom, spacing, seed)
+        for r in (r for r in todo if r["scene"] == scene):
+            if r["example"] not in judges:
+                judges[r["example"]] = Judge.for_example(
+                    interactions.build(r["example"], objects_dir, seed),
+                    JudgeSettings(spacing=spacing, seed=seed))
+            v = judges[r["example"]].judge(jscene, r["_pose"])
+            if bool(v.valid) != r["valid"] or "; ".join(v.reasons) != r["reasons"]:
+                changed.add((scene, r["example"]))
+            r["valid"] = bool(v.valid)
+            r["penetration_m"] = (round(float(v.penetration), 4) if np.isfinite(v.penetration)
+                                  else "inf")
+            r["contact"] = round(float(v.contact), 3)
+            r["reasons"] = "; ".join(v.reasons)
+        log(f"judged {scene} again")
+    methods = tuple(m for m in METHODS if m in (st.get("methods") or METHODS))
+    res.table = metrics(res.judgements, methods, res.runs)
+    if judge_check and objects_dir:
+        from . import labelled
+
+        res.judge_accuracy = labelled.judge_accuracy(labelled.load(), objects_dir,
+                                                     Path(objects_dir).parent)[0]
+    res.settings["rejudged_from"] = str(d)
+    method = "iT-weighted" if "iT-weighted" in methods else methods[0]
+    with atomic_dir(out_dir, "run.json") as tmp:
+        write_all(res, tmp)
+        (tmp / "pictures").mkdir(exist_ok=True)
+        for png in sorted((d / "pictures").glob("*.png")):
+            example, _, scene = png.stem.partition("__")
+            if (scene, example) not in changed:
+                shutil.copy2(png, tmp / "pictures" / png.name)
+        for scene, example in sorted(changed):
+            rows = sorted((r for r in res.judgements if r["scene"] == scene
+                           and r["example"] == example and r["method"] == method
+                           and r["group"] == "top"), key=lambda r: r["rank"])
+            if rows:
+                run_sheet(tmp / "pictures" / f"{example}__{scene}.png",
+                          load_geometry(scenes_dir / f"{scene}.ply"),
+                          interactions.build(example, objects_dir, seed).query, rows, example,
+                          scene, method)
+    log(f"judged {len(todo)} poses again ({len(changed)} (scene, example) pairs changed) "
+        f"into {out_dir}")
     return res
