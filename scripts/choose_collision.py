@@ -12,6 +12,11 @@ among those that keep every valid one; ties go to fewer tests (no through test f
 collision test before two), then to testing more of the query (``above`` None first, then
 the lower), then to the smaller depth.
 
+Then the ground test (``clearance.below_ground``: the posed query no deeper than ``g`` below
+the lowest scene sample around it, on the scene sampled at 1 cm as detection samples it) is
+added to the kept option at each depth of ``GROUND_DEPTHS``; it is kept at the smallest depth
+that keeps every valid pose and rejects more invalid ones than the option alone.
+
     python scripts/choose_collision.py --objects ../shared/data/objects \\
         --shared ../shared/data -o docs/results/collision
 """
@@ -26,12 +31,15 @@ from pathlib import Path
 import numpy as np
 
 from interaction_tensor import collision
+from interaction_tensor.clearance import below_ground
+from interaction_tensor.scene import prepare_scene
 from interaction_tensor.evaluation import labelled
 from interaction_tensor.examples import interactions, validation
 from interaction_tensor.io import load_geometry
 
 ABOVE = (None, 0.0, 0.05, 0.10)
 DEPTHS = (0.01, 0.02, 0.05, 0.1, 0.2)
+GROUND_DEPTHS = (0.01, 0.02, 0.05, 0.1)
 AFFORDANCES = ("placing", "sitting", "hanging", "filling", "riding")
 
 
@@ -68,6 +76,24 @@ def options(rows: list) -> list:
     return out
 
 
+def passes(rows: list, tests, through: bool):
+    """(valid, passes the option, below ground m) per pose of one affordance's rows."""
+    poses = sorted({r["pose"] for r in rows})
+    index = {p: k for k, p in enumerate(poses)}
+    valid = np.zeros(len(poses), bool)
+    ok = np.ones(len(poses), bool)
+    below = np.zeros(len(poses))
+    for r in rows:
+        k = index[r["pose"]]
+        valid[k], below[k] = r["valid"], r["below_ground_m"]
+        if through and not r["through"]:
+            ok[k] = False
+        for above, depth in tests:
+            if r["above"] == _label(above) and float(r["separation_m"]) > depth:
+                ok[k] = False
+    return valid, ok, below
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--objects", required=True)
@@ -76,12 +102,13 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     poses = labelled.load()
-    colliders, examples, rows = {}, {}, []
+    colliders, scenes, examples, rows = {}, {}, {}, []
     for n, p in enumerate(poses):
         if p.scene not in colliders:
             g = (load_geometry(Path(args.shared) / p.scene[7:]) if p.scene.startswith("shared:")
                  else validation.build_scene(p.scene.split(":", 1)[1]).geometry)
             colliders[p.scene] = collision.MeshCollider(g.vertices, g.faces)
+            scenes[p.scene] = prepare_scene(g, 0.01, seed=0)
         if p.example not in examples:
             # the triangles and heights detection tests: the descriptor's own (its reference
             # point is the support for all but filling, whose is the tap's outlet)
@@ -95,16 +122,18 @@ def main(argv=None) -> int:
                     bodies[above] = collision.Body(v, faces)
             section = tensor.through_section
             through = collision.Body(*collision.polygon(section)) if len(section) else None
-            examples[p.example] = bodies, through
-        bodies, through = examples[p.example]
+            examples[p.example] = bodies, through, tensor
+        bodies, through, tensor = examples[p.example]
         pose = np.asarray(p.pose, float)
         crossed = through is not None and colliders[p.scene].collides(through, pose)
+        at = (pose[:3, :3] @ tensor.reference_point + pose[:3, 3])[None]
+        below = float(below_ground(at, tensor, scenes[p.scene])[0])
         for above, body in bodies.items():
             sep = colliders[p.scene].separation(body, pose, limit=max(DEPTHS))
             rows.append({"affordance": p.affordance, "example": p.example, "scene": p.scene,
                          "case": p.case, "valid": p.valid, "pose": n, "above": _label(above),
                          "separation_m": sep if np.isfinite(sep) else "inf",
-                         "through": crossed})
+                         "through": crossed, "below_ground_m": round(below, 4)})
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "labelled_separation.csv", "w", newline="") as fh:
@@ -141,12 +170,32 @@ def main(argv=None) -> int:
                 tests = ", ".join(f"({_label(a)}, {d:g})" for a, d in o[0])
                 lines.append(f"| {aff} | {tests} | {'yes' if o[1] else ''} | {o[2]}/{o[3]} | "
                              f"{o[4]}/{o[5]} | {'**yes**' if o is best else ''} |")
-    lines += ["", "Chosen (`ACCEPTANCE[...]`: `collision` = [(depth, above), ...], `through`):",
-              ""]
+    lines += ["", "Chosen (`ACCEPTANCE[...]`: `collision` = [(depth, above), ...], `through`, "
+              "`below_ground`):", ""]
+    ground = {}
+    table = ["", "The ground test added to the kept option:", "",
+             "| affordance | ground depth m | valid kept | invalid rejected | chosen |",
+             "|---|---:|---:|---:|:---:|"]
+    for aff, o in chosen.items():
+        if o is None:
+            continue
+        valid, ok, below = passes([r for r in rows if r["affordance"] == aff], o[0], o[1])
+        base = int((~ok[~valid]).sum())
+        ground[aff] = None
+        for g in GROUND_DEPTHS:
+            okg = ok & (below <= g)
+            kept, rejected = int(okg[valid].sum()), int((~okg[~valid]).sum())
+            take = ground[aff] is None and kept == int(valid.sum()) and rejected > base
+            if take:
+                ground[aff] = g
+            table.append(f"| {aff} | {g:g} | {kept}/{int(valid.sum())} | {rejected}/"
+                         f"{int((~valid).sum())} (option alone {base}) | "
+                         f"{'**yes**' if take else ''} |")
     for aff, o in chosen.items():
         lines.append(f"- {aff}: " + ("none keeps every valid pose" if o is None else
                                      "collision=" + repr([(d, a) for a, d in o[0]]) +
-                                     f", through={o[1]}"))
+                                     f", through={o[1]}, below_ground={ground.get(aff)}"))
+    lines += table
     (out / "choice.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0

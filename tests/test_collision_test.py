@@ -26,7 +26,8 @@ from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.predictions import top_k
 
 #: every pair accepted by score and the sampled placement tests off: only collision decides
-OPEN = dict(threshold=1e-3, clearance=False, contact=False, interior=False, top_k=3)
+OPEN = dict(threshold=1e-3, clearance=False, contact=False, interior=False, ground=False,
+            top_k=3)
 
 
 @pytest.fixture(scope="module")
@@ -247,3 +248,82 @@ def test_the_through_section_is_empty_where_nothing_passes_through_the_query():
     assert np.abs(section[:, 1]).max() < 0.003                      # across the rod
     r = np.linalg.norm(section[:, [0, 2]], axis=1)
     assert 0.015 < r.min() and r.max() <= 0.0215           # the rod + 1 cm (1 mm cells), in the ring
+
+
+def test_the_scene_ground_level_is_the_lowest_sample_around(hanging):
+    """Scene.ground_level against a brute-force minimum over the same 10 cm columns."""
+    rng = np.random.default_rng(5)
+    pts = rng.uniform((0, 0, 0), (3, 2, 1), (4000, 3))
+    scene = it.Scene(pts, np.tile([0.0, 0.0, 1.0], (len(pts), 1)), 0.01)
+    q = rng.uniform((-0.5, -0.5, 0), (3.5, 2.5, 1), (300, 3))
+    got = scene.ground_level(q, 0.35)
+    cols = np.floor(pts[:, :2] / 0.1).astype(int)
+    origin = cols.min(axis=0)
+    for p, g in zip(q, got):
+        c = np.floor(p[:2] / 0.1).astype(int)
+        if np.any(c < origin) or np.any(c > cols.max(axis=0)):
+            assert g == -np.inf                      # outside the scanned columns: no ground
+            continue
+        near = np.all(np.abs(cols - c) <= 4, axis=1)  # ceil(0.35 / 0.1) columns around
+        assert g == (pts[near, 2].min() if near.any() else np.inf)
+
+
+def test_a_hanger_hooked_below_the_floor_line_fails_the_ground_test(hanging):
+    """A floorless scan: a low bar 8 cm above the lowest thing scanned (a caster-like block)
+    and a high rail. A hanger hooked on the low bar reaches below that lowest point and fails
+    the ground test (the judge's hook round a chair's star base); on the high rail it passes;
+    with the test off the low bar passes too."""
+    from interaction_tensor.clearance import FAILS_GROUND, below_ground, check_placements
+
+    ex, tensor = hanging
+    drop = float(tensor.reference_point[2] - tensor.query_vertices[:, 2].min())
+    assert 0.1 < drop < 0.3                          # the hanger hangs 10-30 cm below its hook
+    scene = it.prepare_scene(parts_mesh([
+        box_part("caster", (0.0, 0.0, 0.02), (0.05, 0.05, 0.04)),
+        box_part("low bar", (0.0, 0.3, 0.08), (0.6, 0.03, 0.03)),
+        box_part("high rail", (0.0, 0.9, 1.6), (0.6, 0.03, 0.03))]), 0.01, seed=0)
+    low = np.array([[0.0, 0.3, 0.095]])
+    high = np.array([[0.0, 0.9, 1.615]])
+    assert below_ground(low, tensor, scene)[0] == pytest.approx(drop - 0.095, abs=1e-9)
+    assert below_ground(high, tensor, scene)[0] < -1.0
+    settings = it.DetectSettings(clearance=False, contact=False, interior=False)
+    orient = np.zeros(2, np.int64)
+    _, outcome = check_placements(np.vstack([low, high]), orient, tensor, settings, scene)
+    assert outcome.tolist() == [FAILS_GROUND, 0]
+    off = it.DetectSettings(clearance=False, contact=False, interior=False, ground=False)
+    assert check_placements(np.vstack([low, high]), orient, tensor, off, scene)[1].tolist() \
+        == [0, 0]
+    tensor.set_acceptance(tensor.threshold(), below_ground="off")
+    try:
+        _, outcome = check_placements(np.vstack([low, high]), orient, tensor, settings, scene)
+        assert outcome.tolist() == [0, 0]
+    finally:
+        tensor.set_acceptance(tensor.threshold(), below_ground=0.01)
+
+
+def test_the_ground_setting_survives_a_file_and_a_bad_one_is_refused(hanging, tmp_path):
+    import json
+
+    _, tensor = hanging
+    assert tensor.below_ground == 0.01 and tensor.acceptance()["below_ground"] == 0.01
+    tensor.set_acceptance(tensor.threshold(), below_ground=0.03)
+    try:
+        assert it.InteractionTensor.load(tensor.save(tmp_path / "g.npz")).below_ground == 0.03
+    finally:
+        tensor.set_acceptance(tensor.threshold(), below_ground=0.01)
+    for wrong in (-0.01, 2.0, "on", True):
+        with pytest.raises(ValueError):
+            tensor.set_acceptance(tensor.threshold(), below_ground=wrong)
+    with np.load(tmp_path / "g.npz") as data:
+        raw = {k: data[k] for k in data.files}
+    header = json.loads(raw["header"].tobytes())
+    for name, value in (("a.npz", "deep"), ("b.npz", -1.0)):
+        raw["header"] = np.frombuffer(json.dumps({**header, "below_ground": value}).encode(),
+                                      np.uint8)
+        np.savez(tmp_path / name, **raw)
+        with pytest.raises(InputError, match="below_ground"):
+            it.InteractionTensor.load(tmp_path / name)
+    old = {k: v for k, v in header.items() if k != "below_ground"}   # a file of before
+    raw["header"] = np.frombuffer(json.dumps(old).encode(), np.uint8)
+    np.savez(tmp_path / "old.npz", **raw)
+    assert it.InteractionTensor.load(tmp_path / "old.npz").below_ground is None

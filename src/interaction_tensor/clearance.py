@@ -50,6 +50,12 @@ UNTESTED, PLACED, FAILS_CLEARANCE, FAILS_CONTACT, FAILS_INTERIOR = -1, 0, 1, 2, 
 #: A placement that passed these tests but whose triangles cross the scene's: detection's
 #: exact collision test of the placements it ranks (:class:`..detect.CollisionCheck`).
 FAILS_COLLISION = 4
+#: A placement whose query object reaches more than the descriptor's ``below_ground`` below
+#: the scene's ground (:func:`below_ground`).
+FAILS_GROUND = 5
+#: How far (m) beyond the query object's size the ground is looked for around a placement
+#: (the judge's ``ground_radius``).
+GROUND_RADIUS = 1.5
 #: Contact modes: no contact test, the main group (at the reference point), every group.
 CONTACT_MODES = ("off", "main", "all")
 
@@ -198,10 +204,23 @@ def interior_violations(points, orient, tensor, tolerance: float, n_orientations
                             grid)
 
 
+def below_ground(points, tensor, scene) -> np.ndarray:
+    """(P,) how far (m) the query object posed at each test point reaches below the scene's
+    ground (:meth:`~.scene.Scene.ground_level`, within :data:`GROUND_RADIUS` plus the
+    object's size); negative when it stays above. Turning about +Z keeps the object's lowest
+    point, so the orientation does not matter."""
+    v = tensor.query_vertices if len(tensor.query_vertices) else tensor.clearance_points
+    lowest = float(v[:, 2].min() - tensor.reference_point[2])
+    points = np.asarray(points, float)
+    ground = scene.ground_level(points, GROUND_RADIUS + tensor.radius)
+    return ground - (points[:, 2] + lowest)
+
+
 def check_placements(points, orient, tensor, settings, scene, grid=None):
     """The placement tests of pairs the score accepted, in order: clearance (every pair),
     contact (those that kept their clearance), interior (those that also kept their
-    contact).
+    contact), ground (when the descriptor has ``below_ground``: the query object no deeper
+    than that below the scene's ground).
 
     Parameters
     ----------
@@ -237,6 +256,10 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
         iv = interior_violations(points[todo], orient[todo], tensor,
                                  settings.interior_tolerance, n_o, scene, grid)
         outcome[todo[iv > tensor.interior_limit * n_int]] = FAILS_INTERIOR
+    todo = np.flatnonzero(outcome == PLACED)
+    if settings.ground and tensor.below_ground is not None and len(todo):
+        deep = below_ground(points[todo], tensor, scene) > tensor.below_ground
+        outcome[todo[deep]] = FAILS_GROUND
     return viol, outcome
 
 

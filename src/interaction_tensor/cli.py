@@ -64,6 +64,9 @@ def detection_options(p) -> None:
                         "again)")
     p.add_argument("--no-interior", action="store_true",
                    help="skip the interior test (no scene surface through the object)")
+    p.add_argument("--no-ground", action="store_true",
+                   help="skip the ground test (the object no deeper than the descriptor "
+                        "allows below the lowest scene point around it)")
     p.add_argument("--no-collision", action="store_true",
                    help="skip the collision test of the top predictions (a mesh scene's "
                         "triangles against the query's, python-fcl)")
@@ -172,7 +175,7 @@ def _detect_settings(args):
 
     return DetectSettings(early_exit=not args.no_early_exit, clearance=not args.no_clearance,
                           contact=not args.no_contact, interior=not args.no_interior,
-                          collision=not args.no_collision,
+                          ground=not args.no_ground, collision=not args.no_collision,
                           **{field: getattr(args, dest) for field, dest in _SETTING_OPTIONS.items()})
 
 
@@ -226,7 +229,8 @@ def _report(args, result, outdir) -> None:
     _say(args, f"accepted {st['pairs_accepted']} of the {st['pairs_accepted_by_score']} the "
                f"score accepted (placement tests failed: clearance "
                f"{st['pairs_failing_clearance']}, contact {st['pairs_failing_contact']}, "
-               f"interior {st['pairs_failing_interior']})")
+               f"interior {st['pairs_failing_interior']}, ground "
+               f"{st['pairs_failing_ground']})")
     if st["collision_test"] == "on":
         spent = " (the tests allowed are spent: fewer predictions)" \
             if st["collision_tests_exhausted"] else ""
@@ -258,7 +262,8 @@ def summary(result, outdir) -> dict:
             "pairs_scored": st["pairs_scored"], "pairs_accepted": st["pairs_accepted"],
             "pairs_accepted_by_score": st["pairs_accepted_by_score"],
             **{k: st[k] for k in ("pairs_failing_clearance", "pairs_failing_contact",
-                                  "pairs_failing_interior", "collision_test", "collision_tests",
+                                  "pairs_failing_interior", "pairs_failing_ground",
+                                  "collision_test", "collision_tests",
                                   "pairs_failing_collision", "pairs_with_nothing_through")},
             "candidates_per_second": st.get("candidates_per_second"),
             "pairs_per_second": st.get("pairs_per_second"), "seconds": st["seconds"],

@@ -148,6 +148,10 @@ class InteractionTensor:
     through : whether detection asks the scene to cross the posed ``through_section`` (on
         mesh scenes; hanging)
     ground : height (m) of the ground plane of the example, or None
+    below_ground : detection rejects a placement whose query object reaches more than this
+        (m) below the scene's ground (the lowest scene sample within 1.5 m of it: a hanger
+        hooked round a chair's star base in a scan without its floor hangs through where
+        the floor is); None: no such test
     scene_points : (S, 3) scene-object samples used for the Voronoi step (subsampled)
     scene_spacing : spacing (m) of the scene-object samples; detection samples at it
     vectors : ``surface`` or ``points``, how provenance (and test) vectors are measured
@@ -189,6 +193,7 @@ class InteractionTensor:
     through_section: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     through: bool = False
     ground: float | None = None
+    below_ground: float | None = None
     thresholds: dict = field(default_factory=dict)
     self_scores: dict = field(default_factory=dict)
     meta: dict = field(default_factory=dict)
@@ -207,7 +212,8 @@ class InteractionTensor:
     def set_acceptance(self, threshold: float, clearance_limit: float | None = None,
                        interior_limit: float | None = None, contact: tuple | None = None,
                        collision: tuple | list | str | None = None,
-                       through: bool | None = None) -> None:
+                       through: bool | None = None,
+                       below_ground: float | str | None = None) -> None:
         """Accept placements scoring at least ``threshold`` (both keypoint sets, paper
         criterion), violating at most ``clearance_limit`` of the clearance points and
         ``interior_limit`` of the interior points, and keeping their contact (``contact`` =
@@ -216,8 +222,9 @@ class InteractionTensor:
         on validation scenes (:func:`interaction_tensor.examples.interactions.acceptance`).
         ``collision`` = (depth, above), or a list of them, sets the collision tests of ranked
         placements (:attr:`collision_tests`; above None: the whole query), ``"off"`` removes
-        them; ``through`` turns the through-the-hook test on or off (:attr:`through`).
-        Arguments left None keep their value."""
+        them; ``through`` turns the through-the-hook test on or off (:attr:`through`);
+        ``below_ground`` (m) sets the ground test (:attr:`below_ground`), ``"off"`` removes
+        it. Arguments left None keep their value."""
         if not 0 < threshold <= 1:
             raise ValueError("threshold must be in (0, 1]")
         for name, value in (("clearance_limit", clearance_limit),
@@ -230,6 +237,10 @@ class InteractionTensor:
                     not 0 <= fraction <= 1 or not 0 < angle <= 90:
                 raise ValueError("contact must be (off|main|all, distance > 0, fraction in "
                                  "[0, 1][, angle in (0, 90]])")
+        if below_ground is not None and not (isinstance(below_ground, str)
+                                             and below_ground == "off"):
+            if isinstance(below_ground, (str, bool)) or not 0 <= float(below_ground) <= 1:
+                raise ValueError("below_ground must be a depth in [0, 1] m or 'off'")
         tests = None
         if collision is not None:
             tests = () if isinstance(collision, str) and collision == "off" else \
@@ -248,6 +259,8 @@ class InteractionTensor:
             self.collision_tests = tests
         if through is not None:
             self.through = bool(through)
+        if below_ground is not None:
+            self.below_ground = None if isinstance(below_ground, str) else float(below_ground)
         self.__dict__.pop("_collision_bodies", None)
         self.__dict__.pop("_through_body", None)
 
@@ -290,7 +303,7 @@ class InteractionTensor:
                 "contact_distance": self.contact_distance,
                 "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
                 "collision_tests": [list(t) for t in self.collision_tests],
-                "through": self.through}
+                "through": self.through, "below_ground": self.below_ground}
 
     def pose(self, position, angle: float) -> np.ndarray:
         """4x4 pose taking the training-frame query object to ``position`` at ``angle``."""
@@ -510,7 +523,7 @@ class InteractionTensor:
             "contact_groups": self.contact_groups, "contact_distance": self.contact_distance,
             "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
             "collision_tests": [list(t) for t in self.collision_tests], "through": self.through,
-            "ground": self.ground,
+            "ground": self.ground, "below_ground": self.below_ground,
             "thresholds": self.thresholds, "self_scores": self.self_scores, "meta": self.meta,
         }
         arrays = {
@@ -589,7 +602,7 @@ class InteractionTensor:
             contact_fraction=float(header["contact_fraction"]),
             collision_tests=header["collision_tests"], through=header["through"],
             through_section=arrays["through_section"],
-            ground=header["ground"],
+            ground=header["ground"], below_ground=header["below_ground"],
             thresholds=header["thresholds"],
             self_scores=header["self_scores"], meta=header["meta"])
         return tensor
@@ -626,7 +639,7 @@ class InteractionTensor:
             "collision": ([{"depth": d, "above": a} for d, a in self.collision_tests]
                           or "off"),
             "through": ({"on": self.through, "section_vertices": int(len(self.through_section))}),
-            "ground": self.ground,
+            "ground": self.ground, "below_ground": self.below_ground,
             "thresholds": self.thresholds, "self_scores": self.self_scores,
             "meta": self.meta,
         }
@@ -754,6 +767,9 @@ def validate_descriptor(path, header: dict, arrays: dict):
     ground = header.get("ground")
     if ground is not None:
         number("ground", -1e4, 1e4)
+    below = header.get("below_ground")
+    if below is not None:
+        below = number("below_ground", 0.0, 1.0)
     if "collision_tests" in header:
         try:
             tests = collision_tests(header["collision_tests"])
@@ -795,7 +811,8 @@ def validate_descriptor(path, header: dict, arrays: dict):
               "contact_fraction": header.get("contact_fraction", 0.25),
               "contact_angle": header.get("contact_angle", 90.0),
               "collision_tests": tests, "through": through,
-              "ground": None if ground is None else float(ground), "meta": meta}
+              "ground": None if ground is None else float(ground),
+              "below_ground": None if below is None else float(below), "meta": meta}
     return header, out
 
 

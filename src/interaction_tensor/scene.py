@@ -51,6 +51,7 @@ class Scene:
     _tree: cKDTree | None = field(default=None, repr=False)
     _grid: object = field(default=None, repr=False)
     _collider: object = field(default=None, repr=False)
+    _ground: dict = field(default_factory=dict, repr=False)
 
     @property
     def tree(self) -> cKDTree:
@@ -75,6 +76,32 @@ class Scene:
 
             self._collider = MeshCollider(*self.mesh)
         return self._collider
+
+    def ground_level(self, points: np.ndarray, radius: float, cell: float = 0.1) -> np.ndarray:
+        """(N,) the lowest scene point within ``radius`` (m, horizontally, in ``cell`` columns:
+        a square window) of each of ``points`` (N, 3): the floor, or where a scan has no
+        floor the lowest thing scanned around. The judge's rule (``JudgeScene.ground_level``);
+        the column map is built once per radius."""
+        key = (round(float(radius), 6), float(cell))
+        if key not in self._ground:
+            from scipy.ndimage import minimum_filter
+
+            ij = np.floor(self.points[:, :2] / cell).astype(np.int64)
+            origin = ij.min(axis=0)
+            ij -= origin
+            shape = tuple(int(v) for v in ij.max(axis=0) + 1)
+            low = np.full(shape[0] * shape[1], np.inf)
+            np.minimum.at(low, ij[:, 0] * shape[1] + ij[:, 1], self.points[:, 2])
+            r = int(np.ceil(radius / cell))
+            low = minimum_filter(low.reshape(shape), size=2 * r + 1, mode="constant",
+                                 cval=np.inf)
+            self._ground[key] = (origin, low)
+        origin, low = self._ground[key]
+        c = np.floor(np.asarray(points, float)[:, :2] / cell).astype(np.int64) - origin
+        inside = np.all((c >= 0) & (c < low.shape), axis=1)
+        out = np.full(len(c), -np.inf)
+        out[inside] = low[c[inside, 0], c[inside, 1]]
+        return out
 
     def __len__(self) -> int:
         return len(self.points)

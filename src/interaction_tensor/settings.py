@@ -206,6 +206,10 @@ class DetectSettings:
     #: ``depth - interior_tolerance`` to more than the descriptor's interior limit of them.
     #: The 1 cm tolerance lets a person sink a centimetre into a soft seat (ours).
     interior: bool = True
+    #: Ground test (when the descriptor has ``below_ground``): the posed query object no
+    #: deeper than that below the lowest scene sample within 1.5 m of it (a hanger hooked
+    #: round a chair's star base in a scan without its floor; ours).
+    ground: bool = True
     interior_tolerance: float = 0.01
     #: Collision test (when the scene is a triangle mesh, ``Scene.mesh``, and the descriptor
     #: has a collision depth): a placement that reaches the top k is moved into the scene

@@ -388,9 +388,9 @@ def _rider_and_bike(rider: Geometry, seed: int):
 #: docs/results/tuning/.
 ACCEPTANCE: dict = {
     # precision and recall of the pair decisions on the validation pairs (tuning.md); the
-    # collision tests [(depth, above)] of ranked placements and the through test chosen on
-    # the judge's labelled set: every valid pose kept, the most invalid ones rejected
-    # (scripts/choose_collision.py, docs/results/collision/choice.md)
+    # collision tests [(depth, above)] of ranked placements, the through test and the
+    # ground test chosen on the judge's labelled set: every valid pose kept, the most
+    # invalid ones rejected (scripts/choose_collision.py, docs/results/collision/choice.md)
     "placing": dict(threshold=0.03, clearance_limit=0.05, interior_limit=0.02,
                     contact=("main", 0.02, 0.9, 90.0),            # 99.2 %, 95.0 %
                     collision=[(0.01, None)], through=False),     # 30/76 invalid rejected
@@ -400,7 +400,8 @@ ACCEPTANCE: dict = {
                     through=False),                               # 5 cm, above the seat 1 cm
     "hanging": dict(threshold=0.14, clearance_limit=0.05, interior_limit=1.0,
                     contact=("main", 0.02, 0.75, 30.0),           # 45.2 %, 0.8 % (*)
-                    collision=[(0.01, None)], through=True),      # 90/90
+                    collision=[(0.01, None)], through=True,       # 90/95, and with the
+                    below_ground=0.01),                           # ground test 95/95
     "filling": dict(threshold=0.575, clearance_limit=0.02, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),             # 100 %, 71.7 %
                     collision=[(0.01, None)], through=True),      # 9/69 (support under it)
