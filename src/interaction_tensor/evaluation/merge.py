@@ -23,7 +23,7 @@ from ..errors import InputError
 
 #: settings that may differ between the parts of one evaluation (the judge's labelled-set
 #: check need run in one part only; a part may itself be a merge)
-_PER_PART = {"scenes", "total_seconds", "judge_check", "merged_from"}
+_PER_PART = {"scenes", "total_seconds", "judge_check", "merged_from", "rejudged_from"}
 
 _INT = {"rank", "candidates", "pairs", "accepted", "valid_n", "valid_right", "invalid_n",
         "invalid_right"}
