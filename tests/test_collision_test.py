@@ -251,7 +251,8 @@ def test_the_through_section_is_empty_where_nothing_passes_through_the_query():
 
 
 def test_the_scene_ground_level_is_the_lowest_sample_around(hanging):
-    """Scene.ground_level against a brute-force minimum over the same 10 cm columns."""
+    """Scene.ground_level (the judge's rule, :class:`GroundMap`) against a brute-force
+    minimum over the same 10 cm columns, for places over the scan and beside it."""
     rng = np.random.default_rng(5)
     pts = rng.uniform((0, 0, 0), (3, 2, 1), (4000, 3))
     scene = it.Scene(pts, np.tile([0.0, 0.0, 1.0], (len(pts), 1)), 0.01)
@@ -259,13 +260,13 @@ def test_the_scene_ground_level_is_the_lowest_sample_around(hanging):
     got = scene.ground_level(q, 0.35)
     cols = np.floor(pts[:, :2] / 0.1).astype(int)
     origin = cols.min(axis=0)
+    beside = 0
     for p, g in zip(q, got):
         c = np.floor(p[:2] / 0.1).astype(int)
-        if np.any(c < origin) or np.any(c > cols.max(axis=0)):
-            assert g == -np.inf                      # outside the scanned columns: no ground
-            continue
+        beside += bool(np.any(c < origin) or np.any(c > cols.max(axis=0)))
         near = np.all(np.abs(cols - c) <= 4, axis=1)  # ceil(0.35 / 0.1) columns around
-        assert g == (pts[near, 2].min() if near.any() else np.inf)
+        assert g == (pts[near, 2].min() if near.any() else -np.inf)   # none: no ground
+    assert beside > 10 and np.isneginf(got).any()
 
 
 def test_a_hanger_hooked_below_the_floor_line_fails_the_ground_test(hanging):

@@ -51,7 +51,7 @@ class Scene:
     _tree: cKDTree | None = field(default=None, repr=False)
     _grid: object = field(default=None, repr=False)
     _collider: object = field(default=None, repr=False)
-    _ground: dict = field(default_factory=dict, repr=False)
+    _ground: object = field(default=None, repr=False)
 
     @property
     def tree(self) -> cKDTree:
@@ -77,31 +77,12 @@ class Scene:
             self._collider = MeshCollider(*self.mesh)
         return self._collider
 
-    def ground_level(self, points: np.ndarray, radius: float, cell: float = 0.1) -> np.ndarray:
-        """(N,) the lowest scene point within ``radius`` (m, horizontally, in ``cell`` columns:
-        a square window) of each of ``points`` (N, 3): the floor, or where a scan has no
-        floor the lowest thing scanned around. The judge's rule (``JudgeScene.ground_level``);
-        the column map is built once per radius."""
-        key = (round(float(radius), 6), float(cell))
-        if key not in self._ground:
-            from scipy.ndimage import minimum_filter
-
-            ij = np.floor(self.points[:, :2] / cell).astype(np.int64)
-            origin = ij.min(axis=0)
-            ij -= origin
-            shape = tuple(int(v) for v in ij.max(axis=0) + 1)
-            low = np.full(shape[0] * shape[1], np.inf)
-            np.minimum.at(low, ij[:, 0] * shape[1] + ij[:, 1], self.points[:, 2])
-            r = int(np.ceil(radius / cell))
-            low = minimum_filter(low.reshape(shape), size=2 * r + 1, mode="constant",
-                                 cval=np.inf)
-            self._ground[key] = (origin, low)
-        origin, low = self._ground[key]
-        c = np.floor(np.asarray(points, float)[:, :2] / cell).astype(np.int64) - origin
-        inside = np.all((c >= 0) & (c < low.shape), axis=1)
-        out = np.full(len(c), -np.inf)
-        out[inside] = low[c[inside, 0], c[inside, 1]]
-        return out
+    def ground_level(self, points: np.ndarray, radius: float) -> np.ndarray:
+        """(N,) the lowest scene point within ``radius`` (m) of each of ``points`` (N, 3)
+        (:class:`GroundMap`, built on first use)."""
+        if self._ground is None:
+            self._ground = GroundMap(self.points)
+        return self._ground.level(points, radius)
 
     def __len__(self) -> int:
         return len(self.points)
@@ -110,6 +91,43 @@ class Scene:
 #: Bytes a scene point costs ``detect`` at its defaults, with a margin (benchmarks/memory.py
 #: measures it); a scene needing more than the memory available is refused up front.
 BYTES_PER_POINT = 300
+
+
+class GroundMap:
+    """The ground around a place: the lowest of ``points`` (N, 3) per ``cell`` (m) column,
+    and :meth:`level`, the lowest within a square window of columns around a place. The floor,
+    or where a scan has no floor the lowest thing scanned around. Detection's ground test
+    and the judge's read it."""
+
+    def __init__(self, points: np.ndarray, cell: float = 0.1):
+        self.cell = float(cell)
+        ij = np.floor(points[:, :2] / self.cell).astype(np.int64)
+        self.origin = ij.min(axis=0)
+        ij -= self.origin
+        shape = tuple(int(v) for v in ij.max(axis=0) + 1)
+        low = np.full(shape[0] * shape[1], np.inf)
+        np.minimum.at(low, ij[:, 0] * shape[1] + ij[:, 1], points[:, 2])
+        self.low = low.reshape(shape)
+        self._filtered: dict = {}
+
+    def level(self, points: np.ndarray, radius: float) -> np.ndarray:
+        """(N,) the lowest point within ``radius`` (m, horizontally, rounded up to whole
+        columns) of each of ``points`` (N, 3); -inf where the window holds none. The map
+        filtered for a radius is built once."""
+        from scipy.ndimage import minimum_filter
+
+        r = int(np.ceil(radius / self.cell))
+        if r not in self._filtered:
+            padded = np.pad(self.low, r, constant_values=np.inf)
+            low = minimum_filter(padded, size=2 * r + 1, mode="constant", cval=np.inf)
+            self._filtered[r] = np.where(np.isfinite(low), low, -np.inf)
+        low = self._filtered[r]
+        c = np.floor(np.asarray(points, float).reshape(-1, 3)[:, :2] / self.cell).astype(
+            np.int64) - self.origin + r
+        inside = np.all((c >= 0) & (c < low.shape), axis=1)
+        out = np.full(len(c), -np.inf)
+        out[inside] = low[c[inside, 0], c[inside, 1]]
+        return out
 
 
 def available_memory() -> int | None:

@@ -99,7 +99,6 @@ class TorchIndex:
             raise SettingsError("TorchIndex needs levels >= 1 and coarsening >= 1")
         self.levels = [_TileLevel(pts, tile * coarsening ** k, margin * coarsening ** k,
                                   torch, self.device) for k in range(levels)]
-        self.tile, self.margin = self.levels[0].tile, self.levels[0].margin
         f64 = torch.float64
         self.points = torch.as_tensor(pts, dtype=f64, device=self.device)
         self.normals = torch.as_tensor(scene.normals, dtype=f64, device=self.device)

@@ -176,7 +176,7 @@ class JudgeScene:
     surface samples and their KD-tree (for contact, support and what is above or below)."""
 
     def __init__(self, geometry, spacing: float = 0.01, seed: int = 0):
-        from ..scene import prepare_scene
+        from ..scene import GroundMap, prepare_scene
 
         if not geometry.is_mesh:
             raise InputError(getattr(geometry, "source", None),
@@ -187,24 +187,11 @@ class JudgeScene:
         self.spacing = spacing
         self.collider = collision.MeshCollider(geometry.vertices, geometry.faces)
         self.source = getattr(geometry, "source", "<scene>")
-        # lowest sample per 10 cm column, for the ground level around a pose
-        self._cell = 0.1
-        ij = np.floor(self.points[:, :2] / self._cell).astype(np.int64)
-        self._origin = ij.min(axis=0)
-        ij -= self._origin
-        shape = ij.max(axis=0) + 1
-        low = np.full(int(shape[0] * shape[1]), np.inf)
-        np.minimum.at(low, ij[:, 0] * shape[1] + ij[:, 1], self.points[:, 2])
-        self._low = low.reshape(shape)
+        self._ground = GroundMap(self.points)
 
     def ground_level(self, centre, radius: float) -> float:
         """The lowest scene point within ``radius`` (m, horizontally, to 10 cm) of ``centre``."""
-        c = np.floor(np.asarray(centre, float)[:2] / self._cell).astype(np.int64) - self._origin
-        r = int(np.ceil(radius / self._cell))
-        lo, hi = np.maximum(c - r, 0), np.minimum(c + r + 1, self._low.shape)
-        if np.any(hi <= lo):
-            return -np.inf
-        return float(self._low[lo[0]:hi[0], lo[1]:hi[1]].min())
+        return float(self._ground.level(np.asarray(centre, float)[None], radius)[0])
 
 
 class Judge:

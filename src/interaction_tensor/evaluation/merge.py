@@ -239,7 +239,7 @@ def rejudge(directory, out_dir, scenes_dir, objects_dir=None, affordances=None,
     spacing, seed = float(st.get("judge_spacing", 0.01)), int(st.get("seed", 0))
     scenes_dir = Path(scenes_dir)
     todo = [r for r in res.judgements if affordances is None or r["affordance"] in affordances]
-    judges, changed = {}, set()
+    examples, judges, changed = {}, {}, set()
     for scene in sorted({r["scene"] for r in todo}):
         path = scenes_dir / f"{scene}.ply"
         if not path.is_file():
@@ -248,9 +248,9 @@ def rejudge(directory, out_dir, scenes_dir, objects_dir=None, affordances=None,
         jscene = JudgeScene(geom, spacing, seed)
         for r in (r for r in todo if r["scene"] == scene):
             if r["example"] not in judges:
+                examples[r["example"]] = interactions.build(r["example"], objects_dir, seed)
                 judges[r["example"]] = Judge.for_example(
-                    interactions.build(r["example"], objects_dir, seed),
-                    JudgeSettings(spacing=spacing, seed=seed))
+                    examples[r["example"]], JudgeSettings(spacing=spacing, seed=seed))
             v = judges[r["example"]].judge(jscene, r["_pose"])
             if bool(v.valid) != r["valid"] or "; ".join(v.reasons) != r["reasons"]:
                 changed.add((scene, r["example"]))
@@ -283,8 +283,7 @@ def rejudge(directory, out_dir, scenes_dir, objects_dir=None, affordances=None,
             if rows:
                 run_sheet(tmp / "pictures" / f"{example}__{scene}.png",
                           load_geometry(scenes_dir / f"{scene}.ply"),
-                          interactions.build(example, objects_dir, seed).query, rows, example,
-                          scene, method)
+                          examples[example].query, rows, example, scene, method)
     log(f"judged {len(todo)} poses again ({len(changed)} (scene, example) pairs changed) "
         f"into {out_dir}")
     return res
