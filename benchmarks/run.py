@@ -768,7 +768,8 @@ def markdown(results: dict) -> str:
 
 GPU_NOTES = """On the H200 the torch path decides exactly as the Numba path (every run above:
 identical decisions and top 5; the torch tests pass on CUDA), but it is slower than Numba on
-the same machine's CPUs (3-5x) and than Numba on this 2-core machine (5,422 candidates/s).
+the same machine's CPUs (3-5x) and than Numba on this 2-core machine (5,422 candidates/s,
+measured 2026-11-25).
 Scoring the pairs in the order of their test points' tiles made it 1.69x faster (lease 1;
 1.34x in lease 2, where the tile loop no longer waits for the device at each tile; the two
 leases' machines differ, so lease 2's 9.4 s against lease 1's 12.2 s for the tile order is
