@@ -17,6 +17,13 @@ the lowest scene sample around it, on the scene sampled at 1 cm as detection sam
 added to the kept option at each depth of ``GROUND_DEPTHS``; it is kept at the smallest depth
 that keeps every valid pose and rejects more invalid ones than the option alone.
 
+Then, for the examples with standing contacts (what stood on the example's ground: a seated
+person's feet), the feet test (``clearance.feet_supported_poses``: each finds a scene
+sample at most ``r`` below it, or the scene's ground) at each reach of ``FEET_REACHES`` on
+top of the kept option and ground test: kept is the reach that rejects the most invalid
+poses among those that keep every valid one, ties to the larger reach (the more lenient),
+and only when it rejects more than the option alone.
+
     python scripts/choose_collision.py --objects ../shared/data/objects \\
         --shared ../shared/data -o docs/results/collision
 """
@@ -31,7 +38,7 @@ from pathlib import Path
 import numpy as np
 
 from interaction_tensor import collision
-from interaction_tensor.clearance import below_ground
+from interaction_tensor.clearance import below_ground, feet_supported_poses, standing_columns
 from interaction_tensor.scene import prepare_scene
 from interaction_tensor.evaluation import labelled
 from interaction_tensor.examples import interactions, validation
@@ -40,6 +47,7 @@ from interaction_tensor.io import load_geometry
 ABOVE = (None, 0.0, 0.05, 0.10)
 DEPTHS = (0.01, 0.02, 0.05, 0.1, 0.2)
 GROUND_DEPTHS = (0.01, 0.02, 0.05, 0.1)
+FEET_REACHES = (0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5)
 AFFORDANCES = ("placing", "sitting", "hanging", "filling", "riding")
 
 
@@ -77,21 +85,25 @@ def options(rows: list) -> list:
 
 
 def passes(rows: list, tests, through: bool):
-    """(valid, passes the option, below ground m) per pose of one affordance's rows."""
+    """(valid, passes the option, below ground m, {reach: stands}) per pose of one
+    affordance's rows."""
     poses = sorted({r["pose"] for r in rows})
     index = {p: k for k, p in enumerate(poses)}
     valid = np.zeros(len(poses), bool)
     ok = np.ones(len(poses), bool)
     below = np.zeros(len(poses))
+    feet = {f: np.ones(len(poses), bool) for f in FEET_REACHES}
     for r in rows:
         k = index[r["pose"]]
         valid[k], below[k] = r["valid"], r["below_ground_m"]
+        for f in FEET_REACHES:
+            feet[f][k] = r[f"feet_{f:g}"]
         if through and not r["through"]:
             ok[k] = False
         for above, depth in tests:
             if r["above"] == _label(above) and float(r["separation_m"]) > depth:
                 ok[k] = False
-    return valid, ok, below
+    return valid, ok, below, feet
 
 
 def main(argv=None) -> int:
@@ -102,7 +114,7 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
     poses = labelled.load()
-    colliders, scenes, examples, rows = {}, {}, {}, []
+    colliders, scenes, examples, rows, examples_of = {}, {}, {}, [], {}
     for n, p in enumerate(poses):
         if p.scene not in colliders:
             g = (load_geometry(Path(args.shared) / p.scene[7:]) if p.scene.startswith("shared:")
@@ -123,17 +135,20 @@ def main(argv=None) -> int:
             section = tensor.through_section
             through = collision.Body(*collision.polygon(section)) if len(section) else None
             examples[p.example] = bodies, through, tensor
+            examples_of[p.affordance] = tensor
         bodies, through, tensor = examples[p.example]
         pose = np.asarray(p.pose, float)
         crossed = through is not None and colliders[p.scene].collides(through, pose)
         at = (pose[:3, :3] @ tensor.reference_point + pose[:3, 3])[None]
         below = float(below_ground(at, tensor, scenes[p.scene])[0])
+        stands = {f"feet_{f:g}": bool(feet_supported_poses(pose[None], tensor, scenes[p.scene],
+                                                          f)[0]) for f in FEET_REACHES}
         for above, body in bodies.items():
             sep = colliders[p.scene].separation(body, pose, limit=max(DEPTHS))
             rows.append({"affordance": p.affordance, "example": p.example, "scene": p.scene,
                          "case": p.case, "valid": p.valid, "pose": n, "above": _label(above),
                          "separation_m": sep if np.isfinite(sep) else "inf",
-                         "through": crossed, "below_ground_m": round(below, 4)})
+                         "through": crossed, "below_ground_m": round(below, 4), **stands})
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "labelled_separation.csv", "w", newline="") as fh:
@@ -176,10 +191,16 @@ def main(argv=None) -> int:
     table = ["", "The ground test added to the kept option:", "",
              "| affordance | ground depth m | valid kept | invalid rejected | chosen |",
              "|---|---:|---:|---:|:---:|"]
+    feet_choice = {}
+    feet_table = ["", "The feet test added to the kept option and ground test (examples with "
+                  "standing contacts):", "",
+                  "| affordance | feet reach m | valid kept | invalid rejected | chosen |",
+                  "|---|---:|---:|---:|:---:|"]
     for aff, o in chosen.items():
         if o is None:
             continue
-        valid, ok, below = passes([r for r in rows if r["affordance"] == aff], o[0], o[1])
+        valid, ok, below, feet = passes([r for r in rows if r["affordance"] == aff], o[0],
+                                        o[1])
         base = int((~ok[~valid]).sum())
         ground[aff] = None
         for g in GROUND_DEPTHS:
@@ -191,11 +212,28 @@ def main(argv=None) -> int:
             table.append(f"| {aff} | {g:g} | {kept}/{int(valid.sum())} | {rejected}/"
                          f"{int((~valid).sum())} (option alone {base}) | "
                          f"{'**yes**' if take else ''} |")
+        if not standing_columns(examples_of[aff]):
+            feet_choice[aff] = None
+            continue
+        okg = ok & (below <= ground[aff]) if ground[aff] is not None else ok
+        base_g = int((~okg[~valid]).sum())
+        tried = []
+        for f in FEET_REACHES:
+            okf = okg & feet[f]
+            tried.append((f, int(okf[valid].sum()), int((~okf[~valid]).sum())))
+        good = [t for t in tried if t[1] == int(valid.sum()) and t[2] > base_g]
+        best_f = max(good, key=lambda t: (t[2], t[0]))[0] if good else None
+        feet_choice[aff] = best_f
+        for f, kept, rejected in tried:
+            feet_table.append(f"| {aff} | {f:g} | {kept}/{int(valid.sum())} | {rejected}/"
+                              f"{int((~valid).sum())} (without it {base_g}) | "
+                              f"{'**yes**' if f == best_f else ''} |")
     for aff, o in chosen.items():
         lines.append(f"- {aff}: " + ("none keeps every valid pose" if o is None else
                                      "collision=" + repr([(d, a) for a, d in o[0]]) +
-                                     f", through={o[1]}, below_ground={ground.get(aff)}"))
-    lines += table
+                                     f", through={o[1]}, below_ground={ground.get(aff)}"
+                                     f", feet_reach={feet_choice.get(aff)}"))
+    lines += table + feet_table
     (out / "choice.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0

@@ -152,6 +152,10 @@ class InteractionTensor:
         (m) below the scene's ground (the lowest scene sample within 1.5 m of it: a hanger
         hooked round a chair's star base in a scan without its floor hangs through where
         the floor is); None: no such test
+    feet_reach : detection rejects a placement whose standing contacts (the contact groups
+        that stood on the example's ground: a seated person's feet) find no scene surface
+        within this (m) below them, nor the scene's ground (a person on a counter top with
+        the feet in the air); None: no such test
     scene_points : (S, 3) scene-object samples used for the Voronoi step (subsampled)
     scene_spacing : spacing (m) of the scene-object samples; detection samples at it
     vectors : ``surface`` or ``points``, how provenance (and test) vectors are measured
@@ -194,6 +198,7 @@ class InteractionTensor:
     through: bool = False
     ground: float | None = None
     below_ground: float | None = None
+    feet_reach: float | None = None
     thresholds: dict = field(default_factory=dict)
     self_scores: dict = field(default_factory=dict)
     meta: dict = field(default_factory=dict)
@@ -213,7 +218,8 @@ class InteractionTensor:
                        interior_limit: float | None = None, contact: tuple | None = None,
                        collision: tuple | list | str | None = None,
                        through: bool | None = None,
-                       below_ground: float | str | None = None) -> None:
+                       below_ground: float | str | None = None,
+                       feet_reach: float | str | None = None) -> None:
         """Accept placements scoring at least ``threshold`` (both keypoint sets, paper
         criterion), violating at most ``clearance_limit`` of the clearance points and
         ``interior_limit`` of the interior points, and keeping their contact (``contact`` =
@@ -223,8 +229,9 @@ class InteractionTensor:
         ``collision`` = (depth, above), or a list of them, sets the collision tests of ranked
         placements (:attr:`collision_tests`; above None: the whole query), ``"off"`` removes
         them; ``through`` turns the through-the-hook test on or off (:attr:`through`);
-        ``below_ground`` (m) sets the ground test (:attr:`below_ground`), ``"off"`` removes
-        it. Arguments left None keep their value."""
+        ``below_ground`` (m) sets the ground test (:attr:`below_ground`) and ``feet_reach``
+        (m) the feet test (:attr:`feet_reach`), ``"off"`` removes either. Arguments left
+        None keep their value."""
         if not 0 < threshold <= 1:
             raise ValueError("threshold must be in (0, 1]")
         for name, value in (("clearance_limit", clearance_limit),
@@ -237,10 +244,10 @@ class InteractionTensor:
                     not 0 <= fraction <= 1 or not 0 < angle <= 90:
                 raise ValueError("contact must be (off|main|all, distance > 0, fraction in "
                                  "[0, 1][, angle in (0, 90]])")
-        if below_ground is not None and not (isinstance(below_ground, str)
-                                             and below_ground == "off"):
-            if isinstance(below_ground, (str, bool)) or not 0 <= float(below_ground) <= 1:
-                raise ValueError("below_ground must be a depth in [0, 1] m or 'off'")
+        for name, value in (("below_ground", below_ground), ("feet_reach", feet_reach)):
+            if value is not None and not (isinstance(value, str) and value == "off"):
+                if isinstance(value, (str, bool)) or not 0 <= float(value) <= 1:
+                    raise ValueError(f"{name} must be a depth in [0, 1] m or 'off'")
         tests = None
         if collision is not None:
             tests = () if isinstance(collision, str) and collision == "off" else \
@@ -261,6 +268,8 @@ class InteractionTensor:
             self.through = bool(through)
         if below_ground is not None:
             self.below_ground = None if isinstance(below_ground, str) else float(below_ground)
+        if feet_reach is not None:
+            self.feet_reach = None if isinstance(feet_reach, str) else float(feet_reach)
         self.__dict__.pop("_collision_bodies", None)
         self.__dict__.pop("_through_body", None)
 
@@ -303,7 +312,8 @@ class InteractionTensor:
                 "contact_distance": self.contact_distance,
                 "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
                 "collision_tests": [list(t) for t in self.collision_tests],
-                "through": self.through, "below_ground": self.below_ground}
+                "through": self.through, "below_ground": self.below_ground,
+                "feet_reach": self.feet_reach}
 
     def pose(self, position, angle: float) -> np.ndarray:
         """4x4 pose taking the training-frame query object to ``position`` at ``angle``."""
@@ -524,6 +534,7 @@ class InteractionTensor:
             "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
             "collision_tests": [list(t) for t in self.collision_tests], "through": self.through,
             "ground": self.ground, "below_ground": self.below_ground,
+            "feet_reach": self.feet_reach,
             "thresholds": self.thresholds, "self_scores": self.self_scores, "meta": self.meta,
         }
         arrays = {
@@ -603,6 +614,7 @@ class InteractionTensor:
             collision_tests=header["collision_tests"], through=header["through"],
             through_section=arrays["through_section"],
             ground=header["ground"], below_ground=header["below_ground"],
+            feet_reach=header["feet_reach"],
             thresholds=header["thresholds"],
             self_scores=header["self_scores"], meta=header["meta"])
         return tensor
@@ -640,6 +652,7 @@ class InteractionTensor:
                           or "off"),
             "through": ({"on": self.through, "section_vertices": int(len(self.through_section))}),
             "ground": self.ground, "below_ground": self.below_ground,
+            "feet_reach": self.feet_reach,
             "thresholds": self.thresholds, "self_scores": self.self_scores,
             "meta": self.meta,
         }
@@ -770,6 +783,9 @@ def validate_descriptor(path, header: dict, arrays: dict):
     below = header.get("below_ground")
     if below is not None:
         below = number("below_ground", 0.0, 1.0)
+    feet = header.get("feet_reach")
+    if feet is not None:
+        feet = number("feet_reach", 0.0, 1.0)
     if "collision_tests" in header:
         try:
             tests = collision_tests(header["collision_tests"])
@@ -812,7 +828,8 @@ def validate_descriptor(path, header: dict, arrays: dict):
               "contact_angle": header.get("contact_angle", 90.0),
               "collision_tests": tests, "through": through,
               "ground": None if ground is None else float(ground),
-              "below_ground": None if below is None else float(below), "meta": meta}
+              "below_ground": None if below is None else float(below),
+              "feet_reach": None if feet is None else float(feet), "meta": meta}
     return header, out
 
 

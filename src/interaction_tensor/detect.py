@@ -520,7 +520,8 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
     timings["predictions"] = time.perf_counter() - t3
     timings["total"] = time.perf_counter() - t0
     decided = pairs.decided_at
-    from .clearance import FAILS_CLEARANCE, FAILS_CONTACT, FAILS_GROUND, FAILS_INTERIOR
+    from .clearance import (FAILS_CLEARANCE, FAILS_CONTACT, FAILS_FEET, FAILS_GROUND,
+                            FAILS_INTERIOR)
 
     def failing(code):
         return int((outcome == code).sum()) if outcome is not None else 0
@@ -536,6 +537,7 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
         "pairs_failing_contact": failing(FAILS_CONTACT),
         "pairs_failing_interior": failing(FAILS_INTERIOR),
         "pairs_failing_ground": failing(FAILS_GROUND),
+        "pairs_failing_feet": failing(FAILS_FEET),
         **check.stats(),
         "keypoint_comparisons": int(pairs.comparisons),
         "keypoint_comparisons_to_decision": int(decided.sum()),

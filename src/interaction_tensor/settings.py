@@ -210,6 +210,10 @@ class DetectSettings:
     #: deeper than that below the lowest scene sample within 1.5 m of it (a hanger hooked
     #: round a chair's star base in a scan without its floor; ours).
     ground: bool = True
+    #: Feet test (when the descriptor has ``feet_reach``): what stood on the example's ground
+    #: (a seated person's feet) finds a scene surface at most that far below it, or the
+    #: scene's ground (a person on a counter top with the feet in the air; ours).
+    feet: bool = True
     interior_tolerance: float = 0.01
     #: Collision test (when the scene is a triangle mesh, ``Scene.mesh``, and the descriptor
     #: has a collision depth): a placement that reaches the top k is moved into the scene

@@ -35,6 +35,9 @@ FORMAT_VERSION = 1
 PANEL = re.compile(r"door|divider|panel|side")
 #: Seats at least 0.4 m wide (a round stool can be straddled; these cannot).
 WIDE_SEAT = re.compile(r"sofa|bed|armchair|dining chair|office chair|bench seat")
+#: Place sites on a high working top (no board above it) where a person could be posed
+#: sitting on the edge with the feet in the air.
+HIGH_TOP = re.compile(r"counter|island|breakfast bar|workbench|kitchenette")
 #: The example judged for each affordance in the labelled set.
 EXAMPLE_OF = {"placing": "placing-bowl", "filling": "filling-mug",
               "hanging": "hanging-hanger", "sitting": "sitting-human",
@@ -111,6 +114,25 @@ def edge_distance(points_tree, points, start, direction, z, step=0.01, reach=1.5
     return float(reach)
 
 
+def _feet_samples(example) -> np.ndarray:
+    """(N, 3) a seated person's surface samples within 12 cm of its lowest point (its feet),
+    training frame."""
+    from ..examples.interactions import surface_points
+
+    q = surface_points(example.query, 20000)
+    return q[q[:, 2] <= q[:, 2].min() + 0.12]
+
+
+def _nothing_under(scene_points, feet, pose, floor_gap: float = 0.05) -> bool:
+    """Whether no scene sample lies under the posed ``feet`` (their horizontal bounding box,
+    2 cm wider) between ``floor_gap`` above the scene's lowest point and the soles."""
+    f = feet @ pose[:3, :3].T + pose[:3, 3]
+    lo, hi = f[:, :2].min(axis=0) - 0.02, f[:, :2].max(axis=0) + 0.02
+    col = scene_points[np.all((scene_points[:, :2] >= lo) & (scene_points[:, :2] <= hi), axis=1)]
+    floor = scene_points[:, 2].min() + floor_gap
+    return not np.any((col[:, 2] > floor) & (col[:, 2] <= f[:, 2].min()))
+
+
 # ------------------------------------------------------------------ generation
 def _entry(ex, scene, pose, valid, case, note) -> LabelledPose:
     return LabelledPose(ex.spec.affordance, ex.spec.name, scene,
@@ -161,6 +183,23 @@ def _validation_poses(ex, name, vs, jscene) -> list:
             if s.point[2] > 0.6:
                 add(site_pose(ex, s.point, 0.3), False, "on a table top, legs through it",
                     s.note)
+        feet = _feet_samples(ex)
+        for s in by["place"]:
+            if s.point[2] >= 0.85 and HIGH_TOP.search(s.note):
+                # on the edge of a counter or a workbench, facing out over its nearest edge
+                # with nothing under the feet down to the floor: the thighs on the top, the
+                # calves 1 cm past the edge, the feet 40 cm or more in the air (the
+                # published scenes' kitchens: people on counters)
+                angles = np.arange(16) * (math.pi / 8)
+                dirs = np.c_[np.cos(angles), np.sin(angles), np.zeros(16)]
+                reach = np.array([edge_distance(tree, jscene.points, s.point, d, s.point[2])
+                                  for d in dirs])
+                for k in np.argsort(reach, kind="stable"):
+                    pose = site_pose(ex, s.point, float(angles[k]),
+                                     (reach[k] + 0.01 - calves) * dirs[k])
+                    if _nothing_under(jscene.points, feet, pose):
+                        add(pose, False, "on a high top's edge, feet in the air", s.note)
+                        break
     elif aff == "riding":
         for i, s in enumerate(by["astride"]):
             a = facing_angle(ex, s.facing)
