@@ -18,8 +18,9 @@ added to the kept option at each depth of ``GROUND_DEPTHS``; it is kept at the s
 that keeps every valid pose and rejects more invalid ones than the option alone.
 
 Then, for the examples with standing contacts (what stood on the example's ground: a seated
-person's feet), the feet test (``clearance.feet_supported_poses``: each finds a scene
-sample at most ``r`` below it, or the scene's ground) at each reach of ``FEET_REACHES`` on
+person's feet), the feet test (``clearance.feet_gaps_poses``: the drop from each sole to
+the highest scene sample under it, or to the scene's ground where nothing is under it, at
+most ``r``) at each reach of ``FEET_REACHES`` on
 top of the kept option and ground test: kept is the reach that rejects the most invalid
 poses among those that keep every valid one, ties to the larger reach (the more lenient),
 and only when it rejects more than the option alone.
@@ -38,7 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from interaction_tensor import collision
-from interaction_tensor.clearance import below_ground, feet_supported_poses, standing_columns
+from interaction_tensor.clearance import below_ground, feet_gaps_poses, standing_groups
 from interaction_tensor.scene import prepare_scene
 from interaction_tensor.evaluation import labelled
 from interaction_tensor.examples import interactions, validation
@@ -92,18 +93,16 @@ def passes(rows: list, tests, through: bool):
     valid = np.zeros(len(poses), bool)
     ok = np.ones(len(poses), bool)
     below = np.zeros(len(poses))
-    feet = {f: np.ones(len(poses), bool) for f in FEET_REACHES}
+    gap = np.zeros(len(poses))
     for r in rows:
         k = index[r["pose"]]
-        valid[k], below[k] = r["valid"], r["below_ground_m"]
-        for f in FEET_REACHES:
-            feet[f][k] = r[f"feet_{f:g}"]
+        valid[k], below[k], gap[k] = r["valid"], r["below_ground_m"], float(r["feet_gap_m"])
         if through and not r["through"]:
             ok[k] = False
         for above, depth in tests:
             if r["above"] == _label(above) and float(r["separation_m"]) > depth:
                 ok[k] = False
-    return valid, ok, below, feet
+    return valid, ok, below, {f: gap <= f for f in FEET_REACHES}
 
 
 def main(argv=None) -> int:
@@ -141,14 +140,14 @@ def main(argv=None) -> int:
         crossed = through is not None and colliders[p.scene].collides(through, pose)
         at = (pose[:3, :3] @ tensor.reference_point + pose[:3, 3])[None]
         below = float(below_ground(at, tensor, scenes[p.scene])[0])
-        stands = {f"feet_{f:g}": bool(feet_supported_poses(pose[None], tensor, scenes[p.scene],
-                                                          f)[0]) for f in FEET_REACHES}
+        gap = float(feet_gaps_poses(pose[None], tensor, scenes[p.scene])[0])
         for above, body in bodies.items():
             sep = colliders[p.scene].separation(body, pose, limit=max(DEPTHS))
             rows.append({"affordance": p.affordance, "example": p.example, "scene": p.scene,
                          "case": p.case, "valid": p.valid, "pose": n, "above": _label(above),
                          "separation_m": sep if np.isfinite(sep) else "inf",
-                         "through": crossed, "below_ground_m": round(below, 4), **stands})
+                         "through": crossed, "below_ground_m": round(below, 4),
+                         "feet_gap_m": round(gap, 4) if np.isfinite(gap) else "-inf"})
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "labelled_separation.csv", "w", newline="") as fh:
@@ -212,7 +211,7 @@ def main(argv=None) -> int:
             table.append(f"| {aff} | {g:g} | {kept}/{int(valid.sum())} | {rejected}/"
                          f"{int((~valid).sum())} (option alone {base}) | "
                          f"{'**yes**' if take else ''} |")
-        if not standing_columns(examples_of[aff]):
+        if not standing_groups(examples_of[aff]):
             feet_choice[aff] = None
             continue
         okg = ok & (below <= ground[aff]) if ground[aff] is not None else ok

@@ -54,12 +54,11 @@ FAILS_COLLISION = 4
 #: the scene's ground (:func:`below_ground`).
 FAILS_GROUND = 5
 #: A placement whose standing contacts (a seated person's feet) find nothing to stand on
-#: within the descriptor's ``feet_reach`` below them (:func:`feet_supported`).
+#: within the descriptor's ``feet_reach`` below them (:func:`feet_gaps`).
 FAILS_FEET = 6
-#: Columns probed under each standing contact group (:func:`standing_columns`).
-FEET_COLUMNS = 6
-#: Narrowest column (m) probed under a standing contact.
-FEET_MIN_RADIUS = 0.03
+#: How far (m) above a sole a surface may be and still be what the foot stands on (the
+#: judge's contact tolerance).
+FEET_TOLERANCE = 0.02
 #: How far (m) beyond the query object's size the ground is looked for around a placement
 #: (the judge's ``ground_radius``).
 GROUND_RADIUS = 1.5
@@ -223,105 +222,63 @@ def below_ground(points, tensor, scene) -> np.ndarray:
     return ground - (points[:, 2] + lowest)
 
 
-def standing_columns(tensor, columns: int = FEET_COLUMNS, tolerance: float = 0.02) -> list:
-    """The example's standing contacts as columns to probe under a placement: each contact
-    group whose points all lay within ``tolerance`` (m) of the example's ground (a seated
-    person's feet; none without a ground). Per group: up to ``columns`` of its points
-    (farthest-point order, from the one nearest its centre), the group's sole height and the
-    column radius r: the farthest any of its points lies, horizontally, from its nearest
-    column, at least :data:`FEET_MIN_RADIUS` (the columns' disks cover the footprint).
-    Returns a list of ((C, 3) training-frame points, sole height m, r m)."""
+def standing_groups(tensor, tolerance: float = 0.02) -> list:
+    """The example's standing contacts: each contact group whose points all lay within
+    ``tolerance`` (m) of the example's ground (a seated person's feet; none without a
+    ground). Returns a list of ((F, 3) training-frame contact points, sole height m)."""
     if tensor.ground is None or len(tensor.contact_group_ids) == 0:
         return []
-    out = []
     ids = np.asarray(tensor.contact_group_ids)
-    for g in np.unique(ids):
-        pts = np.asarray(tensor.contact_group_points, float)[ids == g]
-        if pts[:, 2].max() > tensor.ground + tolerance:
-            continue
-        xy = pts[:, :2]
-        pick = [int(np.argmin(np.linalg.norm(xy - xy.mean(axis=0), axis=1)))]
-        gap = np.linalg.norm(xy - xy[pick[0]], axis=1)
-        while len(pick) < min(columns, len(pts)):
-            pick.append(int(np.argmax(gap)))
-            gap = np.minimum(gap, np.linalg.norm(xy - xy[pick[-1]], axis=1))
-        out.append((pts[pick], float(pts[:, 2].min()), max(float(gap.max()), FEET_MIN_RADIUS)))
-    return out
+    pts = np.asarray(tensor.contact_group_points, float)
+    return [(pts[ids == g], float(pts[ids == g, 2].min())) for g in np.unique(ids)
+            if pts[ids == g, 2].max() <= tensor.ground + tolerance]
 
 
-def feet_supported_at(columns: np.ndarray, soles: np.ndarray, radius: float, reach: float,
-                      ground: np.ndarray, scene, tolerance: float = 0.02,
-                      chunk: int = 65536) -> np.ndarray:
-    """(P,) bool: whether posed standing columns find something to stand on.
-
-    ``columns`` (P, C, 3) the posed column points of one standing group per placement,
-    ``soles`` (P,) its posed sole heights, ``radius`` the column radius r. A placement's
-    group stands when a scene sample lies within rho = r * sqrt(5) / 2 of a probe on one of
-    its columns, the probes every r from ``tolerance`` above the sole down to ``reach``
-    below it (the balls hold the cylinders of radius r around the columns over that
-    height), or else when ``ground`` (P,) (the lowest scene sample around the placement:
-    a scan without its floor) is no more than ``reach`` below the sole. Placements that
-    stand leave the search at the first probe that finds a sample (top down)."""
-    p = len(soles)
-    found = np.zeros(p, bool)
-    if p == 0:
-        return found
-    rho = radius * np.sqrt(5.0) / 2
-    n_probe = int(np.ceil((reach + tolerance) / radius - 1e-9))
-    for s in range(0, p, chunk):
-        todo = np.arange(s, min(p, s + chunk))
-        for j in range(n_probe):
-            if len(todo) == 0:
-                break
-            q = columns[todo].copy()
-            q[:, :, 2] = (soles[todo] + tolerance - radius * (j + 0.5))[:, None]
-            d = scene.tree.query(q.reshape(-1, 3), distance_upper_bound=rho, workers=-1)[0]
-            hit = (d <= rho).reshape(q.shape[:2]).any(axis=1)
-            found[todo[hit]] = True
-            todo = todo[~hit]
-    rest = ~found
-    found[rest] = ground[rest] >= soles[rest] - reach
-    return found
+def feet_gaps_at(feet: list, scene, ground: np.ndarray, tolerance: float = FEET_TOLERANCE):
+    """(P,) the largest, over the standing groups, of the drop (m) from a group's posed sole
+    to what it would stand on: the highest scene sample at most ``tolerance`` above the sole
+    in the 2 cm columns under the group's contact points and their neighbours
+    (:meth:`~.scene.Scene.highest_under`; the judge's footprint with a margin of 2-4 cm),
+    or, with nothing under it at all, ``ground`` (P,) (the lowest scene sample around: a
+    scan without its floor). ``feet`` holds, per group, ((P, F, 3) posed contact points,
+    (P,) posed sole heights). Negative when the sole is below the surface it meets."""
+    worst = np.full(len(ground), -np.inf)
+    for posed, soles in feet:
+        top = scene.highest_under(posed[:, :, :2], soles + tolerance)
+        top = np.where(np.isfinite(top), top, ground)
+        worst = np.maximum(worst, soles - top)
+    return worst
 
 
-def feet_supported(points, orient, tensor, scene, n_orientations: int,
-                   reach: float | None = None) -> np.ndarray:
-    """(P,) bool: placements (test points (P, 3), orientation indices (P,)) whose every
-    standing contact (:func:`standing_columns`) finds something to stand on within ``reach``
-    (default the descriptor's ``feet_reach``) below it (:func:`feet_supported_at`)."""
-    reach = tensor.feet_reach if reach is None else reach
+def feet_gaps(points, orient, tensor, scene, n_orientations: int) -> np.ndarray:
+    """(P,) :func:`feet_gaps_at` of placements (test points (P, 3), orientation indices
+    (P,)); -inf for a descriptor without standing contacts."""
     points = np.asarray(points, float)
     orient = np.asarray(orient, np.int64)
-    ok = np.ones(len(points), bool)
-    groups = standing_columns(tensor)
+    groups = standing_groups(tensor)
     if not groups or len(points) == 0:
-        return ok
+        return np.full(len(points), -np.inf)
     ground = scene.ground_level(points, GROUND_RADIUS + tensor.radius)
-    for cols, sole, r in groups:
-        off = point_offsets(cols, tensor.reference_point, n_orientations)
-        idx = np.flatnonzero(ok)
-        posed = points[idx, None, :] + off[orient[idx]]
-        soles = points[idx, 2] + (sole - tensor.reference_point[2])
-        ok[idx] = feet_supported_at(posed, soles, r, reach, ground[idx], scene)
-    return ok
+    feet = [(points[:, None, :] + point_offsets(g, tensor.reference_point,
+                                                n_orientations)[orient],
+             points[:, 2] + (sole - tensor.reference_point[2])) for g, sole in groups]
+    return feet_gaps_at(feet, scene, ground)
 
 
-def feet_supported_poses(poses, tensor, scene, reach: float | None = None) -> np.ndarray:
-    """(P,) bool: :func:`feet_supported` for placements given as 4x4 poses (P, 4, 4) of the
+def feet_gaps_poses(poses, tensor, scene) -> np.ndarray:
+    """(P,) :func:`feet_gaps_at` of placements given as 4x4 poses (P, 4, 4) of the
     training-frame query (a turn about +Z and a move: the judge's labelled poses)."""
-    reach = tensor.feet_reach if reach is None else reach
     poses = np.asarray(poses, float).reshape(-1, 4, 4)
-    ok = np.ones(len(poses), bool)
-    groups = standing_columns(tensor)
+    groups = standing_groups(tensor)
     if not groups or len(poses) == 0:
-        return ok
+        return np.full(len(poses), -np.inf)
     at = np.einsum("pij,j->pi", poses[:, :3, :3], tensor.reference_point) + poses[:, :3, 3]
     ground = scene.ground_level(at, GROUND_RADIUS + tensor.radius)
-    for cols, sole, r in groups:
-        posed = np.einsum("pij,cj->pci", poses[:, :3, :3], cols) + poses[:, None, :3, 3]
-        soles = posed[:, :, 2].min(axis=1) - (cols[:, 2].min() - sole)
-        ok &= feet_supported_at(posed, soles, r, reach, ground, scene)
-    return ok
+    feet = []
+    for g, sole in groups:
+        posed = np.einsum("pij,fj->pfi", poses[:, :3, :3], g) + poses[:, None, :3, 3]
+        feet.append((posed, posed[:, :, 2].min(axis=1) - (g[:, 2].min() - sole)))
+    return feet_gaps_at(feet, scene, ground)
 
 
 def check_placements(points, orient, tensor, settings, scene, grid=None):
@@ -329,7 +286,7 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
     contact (those that kept their clearance), interior (those that also kept their
     contact), ground (when the descriptor has ``below_ground``: the query object no deeper
     than that below the scene's ground), feet (when the descriptor has ``feet_reach``: its
-    standing contacts find something to stand on, :func:`feet_supported`).
+    standing contacts find something to stand on, :func:`feet_gaps`).
 
     Parameters
     ----------
@@ -371,8 +328,8 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
         outcome[todo[deep]] = FAILS_GROUND
     todo = np.flatnonzero(outcome == PLACED)
     if settings.feet and tensor.feet_reach is not None and len(todo):
-        stands = feet_supported(points[todo], orient[todo], tensor, scene, n_o)
-        outcome[todo[~stands]] = FAILS_FEET
+        gaps = feet_gaps(points[todo], orient[todo], tensor, scene, n_o)
+        outcome[todo[gaps > tensor.feet_reach]] = FAILS_FEET
     return viol, outcome
 
 

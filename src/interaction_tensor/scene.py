@@ -52,6 +52,7 @@ class Scene:
     _grid: object = field(default=None, repr=False)
     _collider: object = field(default=None, repr=False)
     _ground: object = field(default=None, repr=False)
+    _columns: object = field(default=None, repr=False)
 
     @property
     def tree(self) -> cKDTree:
@@ -83,6 +84,14 @@ class Scene:
         if self._ground is None:
             self._ground = GroundMap(self.points)
         return self._ground.level(points, radius)
+
+    def highest_under(self, xy: np.ndarray, limit: np.ndarray) -> np.ndarray:
+        """(P,) the highest scene sample at most ``limit`` (P,) high in the 2 cm columns
+        under ``xy`` (P, G, 2) and their neighbours (:class:`ColumnIndex`, built on first
+        use); -inf where there is none."""
+        if self._columns is None:
+            self._columns = ColumnIndex(self.points)
+        return self._columns.highest_under(xy, limit)
 
     def __len__(self) -> int:
         return len(self.points)
@@ -127,6 +136,51 @@ class GroundMap:
         inside = np.all((c >= 0) & (c < low.shape), axis=1)
         out = np.full(len(c), -np.inf)
         out[inside] = low[c[inside, 0], c[inside, 1]]
+        return out
+
+
+class ColumnIndex:
+    """The scene's samples by vertical column of ``cell`` (m), each column's heights sorted:
+    what lies under a place (detection's feet test). Stored as one sorted array of integer
+    keys (column, then the height's rank among all heights), so a query is a binary search:
+    memory O(N) however large the scene's extent."""
+
+    def __init__(self, points: np.ndarray, cell: float = 0.02):
+        self.cell = float(cell)
+        ij = np.floor(points[:, :2] / self.cell).astype(np.int64)
+        self.origin = ij.min(axis=0) - 1                   # neighbours stay >= 0
+        ij -= self.origin
+        self.ny = int(ij[:, 1].max()) + 2
+        self.z = np.sort(np.asarray(points[:, 2], float))   # every height, ascending
+        rank = np.searchsorted(self.z, points[:, 2], side="left")
+        self.stride = len(self.z) + 1
+        self.code = np.sort((ij[:, 0] * self.ny + ij[:, 1]) * self.stride + rank)
+
+    def highest_under(self, xy: np.ndarray, limit: np.ndarray, chunk: int = 4096) -> np.ndarray:
+        """(P,) the highest sample at most ``limit`` (P,) high in the columns under ``xy``
+        (P, G, 2) and their 8 neighbours (a margin of at least one cell around each point);
+        -inf where there is none. Exact (tested against a brute-force search)."""
+        xy = np.asarray(xy, float)
+        limit = np.asarray(limit, float)
+        p = len(limit)
+        out = np.full(p, -np.inf)
+        if p == 0 or xy.shape[1] == 0:
+            return out
+        d = np.array([(a, b) for a in (-1, 0, 1) for b in (-1, 0, 1)], np.int64)
+        for s in range(0, p, chunk):
+            c = np.floor(xy[s:s + chunk] / self.cell).astype(np.int64) - self.origin
+            c = (c[:, :, None, :] + d).reshape(len(c), -1, 2)           # (p, 9G, 2)
+            ok = (c[..., 0] >= 0) & (c[..., 1] >= 0) & (c[..., 1] < self.ny)
+            key = c[..., 0] * self.ny + c[..., 1]
+            # the largest height rank <= limit, then the last code at or below (key, rank)
+            r = np.searchsorted(self.z, limit[s:s + chunk], side="right") - 1
+            want = key * self.stride + r[:, None]
+            at = np.searchsorted(self.code, want, side="right") - 1
+            hit = ok & (r[:, None] >= 0) & (at >= 0)
+            at = np.maximum(at, 0)
+            hit &= self.code[at] // self.stride == key
+            z = np.where(hit, self.z[self.code[at] % self.stride], -np.inf)
+            out[s:s + chunk] = z.max(axis=1)
         return out
 
 

@@ -399,7 +399,7 @@ ACCEPTANCE: dict = {
                     contact=("off", 0.02, 0.1, 90.0),             # 38.0 %, 73.3 % (*)
                     collision=[(0.05, None), (0.01, 0.0)],        # 58/94: the whole body
                     through=False,                                # 5 cm, above the seat 1 cm;
-                    feet_reach=0.2),                              # with the feet test 80/94
+                    feet_reach=0.25),                             # with the feet test 80/94
     "hanging": dict(threshold=0.14, clearance_limit=0.05, interior_limit=1.0,
                     contact=("main", 0.02, 0.75, 30.0),           # 45.2 %, 0.8 % (*)
                     collision=[(0.01, None)], through=True,       # 90/95, and with the
