@@ -167,3 +167,25 @@ def test_the_feet_setting_survives_a_file_and_a_bad_one_is_refused(sitting, tmp_
     raw["header"] = np.frombuffer(json.dumps(old).encode(), np.uint8)
     np.savez(tmp_path / "old.npz", **raw)
     assert it.InteractionTensor.load(tmp_path / "old.npz").feet_reach is None
+
+
+def test_a_face_beside_the_shins_is_not_something_to_stand_on(sitting):
+    """A block whose front is flush with its top (the counter of the judge's traps): a person
+    on its edge with the calves 1 cm off the front has the front's samples under the heels'
+    margin, but a vertical face is not a floor: the drop goes to the floor, 47.5 cm down."""
+    scene = it.prepare_scene(parts_mesh([box_part("block", (0.0, 0.0, 0.45), (0.6, 1.2, 0.9)),
+                                         box_part("floor", (0.5, 0.0, -0.01), (3.0, 3.0, 0.02))]),
+                             0.01, seed=0)
+    feet = np.concatenate([g for g, _ in standing_groups(sitting)])
+    heel = float(feet[:, 0].min() - sitting.reference_point[0])
+    point = np.array([[0.3 + 0.01 - heel, 0.0, 0.9]])   # the heels 1 cm off the front (x 0.3)
+    gap = feet_gaps(point, np.zeros(1, np.int64), sitting, scene, 8)[0]
+    soles = 0.9 - (sitting.reference_point[2] - min(s for _, s in standing_groups(sitting)))
+    assert gap == pytest.approx(soles, abs=0.011)        # the floor's top at 0 (to a sample)
+    # the front's own samples do lie within the footprint's margin, up to the soles
+    c = np.floor(scene.points[:, :2] / 0.02).astype(int)
+    front = (np.abs(scene.normals[:, 2]) < 0.1) & (scene.points[:, 2] < soles)
+    posed = feet + (point[0] - sitting.reference_point)
+    cells = np.floor(posed[:, :2] / 0.02).astype(int)
+    near = (np.abs(c[front][:, None] - cells[None]).max(axis=2) <= 1).any(axis=1)
+    assert near.any()

@@ -43,7 +43,7 @@ def test_the_bar_traps_have_a_tap_like_bar_above_and_no_basin(poses):
     from interaction_tensor.evaluation.judge import Judge, JudgeScene
     from interaction_tensor.examples import interactions, validation
 
-    traps = [p for p in poses if p.scene == "validation:judge_traps"]
+    traps = [p for p in poses if p.scene == "validation:judge_traps" and p.affordance == "filling"]
     assert len(traps) == 12 and not any(p.valid for p in traps)
     judge = Judge.for_example(interactions.build("filling-mug", _objects()))
     scene = JudgeScene(validation.build_scene("judge_traps").geometry)
@@ -145,3 +145,22 @@ def test_a_person_on_a_high_tops_edge_has_the_feet_in_the_air(poses):
         v = judge.judge(scenes[p.scene], pose)
         assert not v.valid and "feet out of reach of the floor" in v.reasons
         assert v.feet_gap > 0.4
+
+
+def test_a_person_with_the_calves_along_a_flush_front_has_nothing_to_stand_on(poses):
+    """The people on the judge traps' flush-fronted counter: the front's vertical face lies
+    under the heels' margin; a judge that stood the feet on any surface passed all of them
+    (as it passed office-desk1's person on a desk with the legs down its side panel); the
+    judge that asks for a surface one can stand on rejects them for the feet alone."""
+    from interaction_tensor.evaluation.judge import Judge, JudgeScene, JudgeSettings
+    from interaction_tensor.examples import interactions, validation
+
+    flush = [p for p in poses if "flush-fronted" in p.case]
+    assert len(flush) >= 5 and not any(p.valid for p in flush)
+    ex = interactions.build("sitting-human", _objects())
+    scene = JudgeScene(validation.build_scene("judge_traps").geometry)
+    judge, any_surface = Judge.for_example(ex), Judge.for_example(ex, JudgeSettings(stand_angle=91))
+    for p in flush:
+        v = judge.judge(scene, np.asarray(p.pose))
+        assert v.reasons == ["feet out of reach of the floor"] and v.feet_gap > 0.4
+        assert any_surface.judge(scene, np.asarray(p.pose)).valid

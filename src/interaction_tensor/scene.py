@@ -86,11 +86,13 @@ class Scene:
         return self._ground.level(points, radius)
 
     def highest_under(self, xy: np.ndarray, limit: np.ndarray) -> np.ndarray:
-        """(P,) the highest scene sample at most ``limit`` (P,) high in the 2 cm columns
+        """(P,) the highest scene sample one can stand on (its normal line within
+        :data:`STAND_ANGLE` of vertical) at most ``limit`` (P,) high in the 2 cm columns
         under ``xy`` (P, G, 2) and their neighbours (:class:`ColumnIndex`, built on first
         use); -inf where there is none."""
         if self._columns is None:
-            self._columns = ColumnIndex(self.points)
+            flat = np.abs(self.normals[:, 2]) >= np.cos(np.radians(STAND_ANGLE))
+            self._columns = ColumnIndex(self.points[flat])
         return self._columns.highest_under(xy, limit)
 
     def __len__(self) -> int:
@@ -139,6 +141,12 @@ class GroundMap:
         return out
 
 
+#: Steepest surface (degrees between its normal line and the vertical) a foot stands on: a
+#: floor, a step or a rail's top, not the face of a cabinet beside the shins (the judge's
+#: ``stand_angle``).
+STAND_ANGLE = 45.0
+
+
 class ColumnIndex:
     """The scene's samples by vertical column of ``cell`` (m), each column's heights sorted:
     what lies under a place (detection's feet test). Stored as one sorted array of integer
@@ -147,6 +155,9 @@ class ColumnIndex:
 
     def __init__(self, points: np.ndarray, cell: float = 0.02):
         self.cell = float(cell)
+        points = np.asarray(points, float).reshape(-1, 3)
+        if len(points) == 0:                               # nothing: every query finds none
+            points = np.array([[0.0, 0.0, np.inf]])
         ij = np.floor(points[:, :2] / self.cell).astype(np.int64)
         self.origin = ij.min(axis=0) - 1                   # neighbours stay >= 0
         ij -= self.origin

@@ -52,11 +52,13 @@ Tests, by affordance (``tests`` in :data:`TESTS`):
    scan has a floor, hanging through it is test 1's business; the published office scans
    have none, and a hook round an office chair's star-base leg, 8-10 cm above where the
    floor is, passed every other test with the hanger 8 cm below the casters.
-7. **Feet within reach** (sitting; a rider's feet may dangle, as on a vaulting horse). Under each foot the highest scene surface not above
-   the sole (or, with nothing under it, the ground: the lowest scene point within 1.5 m; feet
-   sunk into a floor are test 1's business) is at most
-   ``feet_reach`` = 25 cm below the sole: a bar stool passes, a table top or a counter does
-   not.
+7. **Feet within reach** (sitting; a rider's feet may dangle, as on a vaulting horse). Under each foot the highest scene surface
+   one can stand on (its normal line within ``stand_angle`` = 45 degrees of vertical: a floor,
+   a step, a foot rail's top, not the face of a cabinet or a desk's side panel beside the
+   shins) not above the sole (or, with none under it, the ground: the lowest scene point
+   within 1.5 m; feet sunk into a floor are test 1's business) is at most ``feet_reach`` =
+   25 cm below the sole: a bar stool passes, a table top or a counter does not, with the
+   shins along its front or not.
 8. **Astride** (riding). The scene's surface goes on between the legs ahead of the seat:
    scene samples in a box 3 cm either side of the body's mid-plane, from 12 to 32 cm ahead of
    the seat point, from 30 cm below to 2 cm above the seat (a motorbike's tank, a bench or a
@@ -128,6 +130,7 @@ class JudgeSettings:
     loop_fraction: float = 0.85
     below_ground: float = 0.01
     feet_reach: float = 0.25
+    stand_angle: float = 45.0
     ground_radius: float = 1.5
     astride_ahead: tuple = (0.12, 0.32)
     astride_half_width: float = 0.03
@@ -183,6 +186,7 @@ class JudgeScene:
                              "the judge needs a mesh scene (triangles), not a point cloud")
         sc = prepare_scene(geometry, spacing, seed=seed + 9176)
         self.points = sc.points
+        self.normals = sc.normals
         self.tree = cKDTree(self.points)
         self.spacing = spacing
         self.collider = collision.MeshCollider(geometry.vertices, geometry.faces)
@@ -452,8 +456,9 @@ class Judge:
         return int(len(np.unique(np.clip(sector, 0, 7))))
 
     def _feet_gap(self, scene: JudgeScene, feet: list, com) -> float:
-        """Largest distance (m) from a sole down to the highest scene surface under it (the
-        ground where nothing is under it); negative when the sole is below that surface."""
+        """Largest distance (m) from a sole down to the highest scene surface under it that one
+        can stand on (the ground where none is under it); negative when the sole is below
+        that surface."""
         st = self.settings
         ground = scene.ground_level(com, st.ground_radius + self.radius)
         worst = -np.inf
@@ -466,8 +471,9 @@ class Judge:
             idx = np.asarray(scene.tree.query_ball_point(
                 centre - [0, 0, 0.5], float(np.hypot(*(hi - lo)) / 2 + 0.5)), np.int64)
             around = scene.points[idx]
+            flat = np.abs(scene.normals[idx, 2]) >= np.cos(np.radians(st.stand_angle))
             under = around[np.all((around[:, :2] >= lo) & (around[:, :2] <= hi), axis=1)
-                           & (around[:, 2] <= sole + st.contact_tolerance)]
+                           & (around[:, 2] <= sole + st.contact_tolerance) & flat]
             top = under[:, 2].max() if len(under) else ground
             worst = max(worst, sole - top)
         return float(worst)

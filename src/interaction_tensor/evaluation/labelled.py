@@ -294,6 +294,17 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
             for angle in (0.0, 2.0):
                 out.append(_entry(ex, "validation:judge_traps", site_pose(ex, point, angle),
                                   False, "under a bar, not in a basin", note))
+        # people on the edges of the counter block, whose front is flush with its top: the
+        # calves 1 cm off the front, the feet in the air beside it (a judge that took the
+        # front's face under the heels for a floor passed them: office-desk1's desk)
+        ex = examples["sitting"]
+        _, calves = seated_reach(ex)
+        for point, angle, note in validation.flush_counter_edges():
+            d = np.array([math.cos(angle), math.sin(angle), 0.0])
+            out.append(_entry(ex, "validation:judge_traps",
+                              site_pose(ex, point, angle, (0.01 - calves) * d), False,
+                              "on a flush-fronted counter's edge, feet in the air beside its "
+                              "front", note))
         log(f"judge_traps: {len(out)} poses so far")
         # a hook round an office chair's star-base leg in a scan without its floor: the
         # hanger hangs through where the floor is (fooled the judge in office-desk6); and

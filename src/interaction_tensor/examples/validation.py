@@ -256,6 +256,18 @@ JUDGE_TRAPS = [((1.3 + x, 1.2, 0.0), f"floor under the stretcher, x {x:+.1f}")
               [((1.3 + x, 2.6 - 0.2, 0.9), f"counter under the towel bar, x {x:+.1f}")
                for x in (-0.3, 0.0, 0.25)]
 
+def flush_counter_edges() -> list:
+    """Where a person can be posed sitting on an edge of :func:`_judge_traps`'s counter block
+    (its front flush with its top), facing out: [(point on the top's edge (3,), facing angle
+    (radians), note)], away from the towel bar's posts."""
+    cx, cy, top = 1.3, 2.6, 0.9
+    out = [((cx + x, cy + 0.3, top), math.pi / 2, f"counter block back edge, x {x:+.1f}")
+           for x in (-0.4, -0.2, 0.0, 0.2, 0.4)]
+    out += [((cx + 0.6 * s, cy + 0.12, top), 0.0 if s > 0 else math.pi,
+             f"counter block {'right' if s > 0 else 'left'} edge") for s in (1, -1)]
+    return out
+
+
 _SCENES = {"living_a": _living_a, "living_b": _living_b, "kitchen_a": _kitchen_a,
            "kitchen_b": _kitchen_b, "office_a": _office_a, "office_nofloor": _office_nofloor,
            "garage": _garage}
