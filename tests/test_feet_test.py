@@ -189,3 +189,20 @@ def test_a_face_beside_the_shins_is_not_something_to_stand_on(sitting):
     cells = np.floor(posed[:, :2] / 0.02).astype(int)
     near = (np.abs(c[front][:, None] - cells[None]).max(axis=2) <= 1).any(axis=1)
     assert near.any()
+
+
+def test_feet_past_the_edge_of_a_floor_hang_below_the_ground_and_fail(sitting):
+    """A floor slab 5 cm thick with nothing beyond its edge: a person on the edge with the
+    legs over the void has nothing under the feet and the soles far below the slab's
+    underside (the lowest thing around): an infinite gap, whatever the reach."""
+    scene = it.prepare_scene(parts_mesh([box_part("floor", (0.0, 0.0, -0.025),
+                                                  (2.0, 2.0, 0.05))]), 0.01, seed=0)
+    feet = np.concatenate([g for g, _ in standing_groups(sitting)])
+    heel = float(feet[:, 0].min() - sitting.reference_point[0])
+    edge = np.array([[1.0 + 0.01 - heel, 0.0, 0.0]])     # the heels 1 cm past the edge
+    inside = np.array([[0.0, 0.0, 0.45]])                 # a seat's height over the floor
+    gaps = feet_gaps(np.vstack([edge, inside]), np.zeros(2, np.int64), sitting, scene, 8)
+    assert gaps[0] == np.inf and gaps[1] == pytest.approx(0.45 - sitting.reference_point[2] +
+                                                          min(s for _, s in
+                                                              standing_groups(sitting)),
+                                                          abs=0.011)

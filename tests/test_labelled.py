@@ -164,3 +164,22 @@ def test_a_person_with_the_calves_along_a_flush_front_has_nothing_to_stand_on(po
         v = judge.judge(scene, np.asarray(p.pose))
         assert v.reasons == ["feet out of reach of the floor"] and v.feet_gap > 0.4
         assert any_surface.judge(scene, np.asarray(p.pose)).valid
+
+
+def test_a_person_on_a_floors_open_edge_hangs_the_legs_below_everything(poses):
+    """The people on the open edge of the judge traps' floor slab: nothing under the feet and
+    the soles 37.5 cm below the lowest thing scanned around (kitchen4's top seats on the edge
+    of the scan's floor); a judge that let such feet stand on the ground passed them."""
+    from interaction_tensor.evaluation.judge import Judge, JudgeScene, JudgeSettings
+    from interaction_tensor.examples import interactions, validation
+
+    edge = [p for p in poses if p.case == "on a floor's open edge, legs hanging below it"]
+    assert len(edge) >= 4 and not any(p.valid for p in edge)
+    ex = interactions.build("sitting-human", _objects())
+    scene = JudgeScene(validation.build_scene("judge_traps").geometry)
+    judge = Judge.for_example(ex)
+    lenient = Judge.for_example(ex, JudgeSettings(feet_below_ground=10.0))
+    for p in edge:
+        v = judge.judge(scene, np.asarray(p.pose))
+        assert v.reasons == ["nothing under the feet"] and v.feet_gap == np.inf
+        assert lenient.judge(scene, np.asarray(p.pose)).valid

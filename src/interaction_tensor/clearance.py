@@ -59,6 +59,10 @@ FAILS_FEET = 6
 #: How far (m) above a sole a surface may be and still be what the foot stands on (the
 #: judge's contact tolerance).
 FEET_TOLERANCE = 0.02
+#: How far (m) below the ground a foot with nothing under it may be: deeper, it hangs past
+#: the edge of the scan's floor, under everything scanned around (the judge's
+#: ``feet_below_ground``).
+FEET_BELOW_GROUND = 0.05
 #: How far (m) beyond the query object's size the ground is looked for around a placement
 #: (the judge's ``ground_radius``).
 GROUND_RADIUS = 1.5
@@ -241,12 +245,16 @@ def feet_gaps_at(feet: list, scene, ground: np.ndarray, tolerance: float = FEET_
     (:meth:`~.scene.Scene.highest_under`; the judge's footprint with a margin of 2-4 cm),
     or, with nothing under it at all, ``ground`` (P,) (the lowest scene sample around: a
     scan without its floor). ``feet`` holds, per group, ((P, F, 3) posed contact points,
-    (P,) posed sole heights). Negative when the sole is below the surface it meets."""
+    (P,) posed sole heights). Negative when the sole is below the surface it meets; inf
+    when a group with nothing under it is more than :data:`FEET_BELOW_GROUND` below the
+    ground (it hangs past the edge of the scan's floor)."""
     worst = np.full(len(ground), -np.inf)
     for posed, soles in feet:
         top = scene.highest_under(posed[:, :, :2], soles + tolerance)
-        top = np.where(np.isfinite(top), top, ground)
-        worst = np.maximum(worst, soles - top)
+        none = ~np.isfinite(top)
+        gap = soles - np.where(none, ground, top)
+        gap[none & (soles < ground - FEET_BELOW_GROUND)] = np.inf
+        worst = np.maximum(worst, gap)
     return worst
 
 

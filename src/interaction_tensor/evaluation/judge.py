@@ -58,7 +58,9 @@ Tests, by affordance (``tests`` in :data:`TESTS`):
    shins) not above the sole (or, with none under it, the ground: the lowest scene point
    within 1.5 m; feet sunk into a floor are test 1's business) is at most ``feet_reach`` =
    25 cm below the sole: a bar stool passes, a table top or a counter does not, with the
-   shins along its front or not.
+   shins along its front or not. A foot with nothing under it more than
+   ``feet_below_ground`` = 5 cm below the ground hangs past the edge of the scan's floor (a
+   person on a floor's edge with the legs in the void under it): "nothing under the feet".
 8. **Astride** (riding). The scene's surface goes on between the legs ahead of the seat:
    scene samples in a box 3 cm either side of the body's mid-plane, from 12 to 32 cm ahead of
    the seat point, from 30 cm below to 2 cm above the seat (a motorbike's tank, a bench or a
@@ -131,6 +133,7 @@ class JudgeSettings:
     below_ground: float = 0.01
     feet_reach: float = 0.25
     stand_angle: float = 45.0
+    feet_below_ground: float = 0.05
     ground_radius: float = 1.5
     astride_ahead: tuple = (0.12, 0.32)
     astride_half_width: float = 0.03
@@ -458,7 +461,8 @@ class Judge:
     def _feet_gap(self, scene: JudgeScene, feet: list, com) -> float:
         """Largest distance (m) from a sole down to the highest scene surface under it that one
         can stand on (the ground where none is under it); negative when the sole is below
-        that surface."""
+        that surface; inf when a foot with nothing under it hangs more than
+        ``feet_below_ground`` below the ground (past the edge of a scan's floor)."""
         st = self.settings
         ground = scene.ground_level(com, st.ground_radius + self.radius)
         worst = -np.inf
@@ -474,8 +478,12 @@ class Judge:
             flat = np.abs(scene.normals[idx, 2]) >= np.cos(np.radians(st.stand_angle))
             under = around[np.all((around[:, :2] >= lo) & (around[:, :2] <= hi), axis=1)
                            & (around[:, 2] <= sole + st.contact_tolerance) & flat]
-            top = under[:, 2].max() if len(under) else ground
-            worst = max(worst, sole - top)
+            if len(under):
+                worst = max(worst, sole - under[:, 2].max())
+            elif sole < ground - st.feet_below_ground:
+                return float("inf")        # hanging below everything scanned around
+            else:
+                worst = max(worst, sole - ground)
         return float(worst)
 
 

@@ -305,6 +305,14 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
                               site_pose(ex, point, angle, (0.01 - calves) * d), False,
                               "on a flush-fronted counter's edge, feet in the air beside its "
                               "front", note))
+        # people on the open edges of the traps' floor slab, the legs hanging below it into
+        # the void past the scan (fooled the judge in kitchen4: nothing under the feet, and
+        # the feet 42 cm below the lowest thing scanned around)
+        for point, angle, note in validation.floor_edge_seats():
+            d = np.array([math.cos(angle), math.sin(angle), 0.0])
+            out.append(_entry(ex, "validation:judge_traps",
+                              site_pose(ex, point, angle, (0.01 - calves) * d), False,
+                              "on a floor's open edge, legs hanging below it", note))
         log(f"judge_traps: {len(out)} poses so far")
         # a hook round an office chair's star-base leg in a scan without its floor: the
         # hanger hangs through where the floor is (fooled the judge in office-desk6); and

@@ -268,6 +268,16 @@ def flush_counter_edges() -> list:
     return out
 
 
+def floor_edge_seats() -> list:
+    """Where a person can be posed sitting on the open edges of :func:`_judge_traps`'s floor
+    slab (no wall there), facing out, the legs hanging below the floor: [(point on the
+    edge (3,), facing angle (radians), note)]."""
+    out = [((3.0, y, 0.0), 0.0, f"floor slab's +x edge, y {y:.1f}") for y in (0.6, 1.8)]
+    out += [((x, 3.4, 0.0), math.pi / 2, f"floor slab's +y edge, x {x:.1f}")
+            for x in (0.4, 2.5)]
+    return out
+
+
 _SCENES = {"living_a": _living_a, "living_b": _living_b, "kitchen_a": _kitchen_a,
            "kitchen_b": _kitchen_b, "office_a": _office_a, "office_nofloor": _office_nofloor,
            "garage": _garage}
