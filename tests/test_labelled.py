@@ -183,3 +183,25 @@ def test_a_person_on_a_floors_open_edge_hangs_the_legs_below_everything(poses):
         v = judge.judge(scene, np.asarray(p.pose))
         assert v.reasons == ["nothing under the feet"] and v.feet_gap == np.inf
         assert lenient.judge(scene, np.asarray(p.pose)).valid
+
+
+def test_feet_on_a_step_high_above_the_floor_are_no_seat_and_a_foot_rest_is(poses):
+    """The judge traps' stepped units: on the low one the feet rest on a step 20 cm above the
+    floor (a seat with a foot rest: valid); on the tall one they rest on a step 1.2 m up, on
+    top of a 1.65 m unit no one climbs to sit on (living-room4's top seats, on a 3 m wall
+    unit): a judge that took any step for a floor passed them."""
+    from interaction_tensor.evaluation.judge import Judge, JudgeScene, JudgeSettings
+    from interaction_tensor.examples import interactions, validation
+
+    steps = [p for p in poses if "step" in p.case and p.scene == "validation:judge_traps"]
+    assert sum(p.valid for p in steps) >= 3 and sum(not p.valid for p in steps) >= 3
+    ex = interactions.build("sitting-human", _objects())
+    scene = JudgeScene(validation.build_scene("judge_traps").geometry)
+    judge = Judge.for_example(ex)
+    lenient = Judge.for_example(ex, JudgeSettings(feet_above_ground=100.0))
+    for p in steps:
+        v = judge.judge(scene, np.asarray(p.pose))
+        assert v.valid == p.valid, (p.case, v.reasons)
+        if not p.valid:
+            assert v.reasons == ["feet on a surface 1.2 m above the ground"]
+            assert lenient.judge(scene, np.asarray(p.pose)).valid

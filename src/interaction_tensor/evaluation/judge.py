@@ -60,7 +60,10 @@ Tests, by affordance (``tests`` in :data:`TESTS`):
    25 cm below the sole: a bar stool passes, a table top or a counter does not, with the
    shins along its front or not. A foot with nothing under it more than
    ``feet_below_ground`` = 5 cm below the ground hangs past the edge of the scan's floor (a
-   person on a floor's edge with the legs in the void under it): "nothing under the feet".
+   person on a floor's edge with the legs in the void under it): "nothing under the feet";
+   so does a foot on a surface more than ``feet_above_ground`` = 0.6 m above the ground (the
+   top of a 3 m wall unit with the feet on its lower ledge: no one climbs there from the
+   floor to sit; a bar stool's foot rest, 0.2-0.5 m up, is fine).
 8. **Astride** (riding). The scene's surface goes on between the legs ahead of the seat:
    scene samples in a box 3 cm either side of the body's mid-plane, from 12 to 32 cm ahead of
    the seat point, from 30 cm below to 2 cm above the seat (a motorbike's tank, a bench or a
@@ -134,6 +137,7 @@ class JudgeSettings:
     feet_reach: float = 0.25
     stand_angle: float = 45.0
     feet_below_ground: float = 0.05
+    feet_above_ground: float = 0.6
     ground_radius: float = 1.5
     astride_ahead: tuple = (0.12, 0.32)
     astride_half_width: float = 0.03
@@ -386,11 +390,10 @@ class Judge:
             if verdict.below_ground > st.below_ground:
                 reasons.append(f"hangs {verdict.below_ground * 100:.0f} cm below the ground")
         if "feet" in self.tests:
-            gap = self._feet_gap(scene, [moved(f) for f in self.feet], com)
+            gap, why = self._feet_gap(scene, [moved(f) for f in self.feet], com)
             verdict.feet_gap = gap
             if not gap <= st.feet_reach:
-                reasons.append("feet out of reach of the floor"
-                               if np.isfinite(gap) else "nothing under the feet")
+                reasons.append(why or "feet out of reach of the floor")
         local_t = (local - t) @ rot            # the scene near the pose, training frame
         if "astride" in self.tests:
             verdict.astride = bool(_in_column(local_t, self.astride_column).any())
@@ -458,11 +461,13 @@ class Judge:
         sector = np.floor((np.arctan2(d[wall, 1], d[wall, 0]) + np.pi) / (np.pi / 4))
         return int(len(np.unique(np.clip(sector, 0, 7))))
 
-    def _feet_gap(self, scene: JudgeScene, feet: list, com) -> float:
+    def _feet_gap(self, scene: JudgeScene, feet: list, com) -> tuple:
         """Largest distance (m) from a sole down to the highest scene surface under it that one
         can stand on (the ground where none is under it); negative when the sole is below
         that surface; inf when a foot with nothing under it hangs more than
-        ``feet_below_ground`` below the ground (past the edge of a scan's floor)."""
+        ``feet_below_ground`` below the ground (past the edge of a scan's floor), or stands
+        on a surface more than ``feet_above_ground`` above it. Returns (gap, the reason of
+        an infinite gap or None)."""
         st = self.settings
         ground = scene.ground_level(com, st.ground_radius + self.radius)
         worst = -np.inf
@@ -479,12 +484,16 @@ class Judge:
             under = around[np.all((around[:, :2] >= lo) & (around[:, :2] <= hi), axis=1)
                            & (around[:, 2] <= sole + st.contact_tolerance) & flat]
             if len(under):
-                worst = max(worst, sole - under[:, 2].max())
+                top = under[:, 2].max()
+                if top > ground + st.feet_above_ground:
+                    return float("inf"), (f"feet on a surface {top - ground:.1f} m above "
+                                          "the ground")
+                worst = max(worst, sole - top)
             elif sole < ground - st.feet_below_ground:
-                return float("inf")        # hanging below everything scanned around
+                return float("inf"), "nothing under the feet"   # below all scanned around
             else:
                 worst = max(worst, sole - ground)
-        return float(worst)
+        return float(worst), None
 
 
 def _in_column(points: np.ndarray, column) -> np.ndarray:

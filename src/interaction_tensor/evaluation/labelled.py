@@ -305,6 +305,17 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
                               site_pose(ex, point, angle, (0.01 - calves) * d), False,
                               "on a flush-fronted counter's edge, feet in the air beside its "
                               "front", note))
+        # people on the stepped units' upper blocks with the feet on the step: a seat with a
+        # foot rest 20 cm above the floor, and the top of a tall unit with the feet 1.2 m
+        # up (living-room4's top seats: on a 3 m wall unit, the feet on its lower ledge)
+        for point, angle, step, note in validation.stepped_unit_seats():
+            d = np.array([math.cos(angle), math.sin(angle), 0.0])
+            low = step < 0.5
+            out.append(_entry(ex, "validation:judge_traps",
+                              site_pose(ex, point, angle, (0.01 - calves) * d), low,
+                              "seat with the feet on a step 20 cm above the floor" if low
+                              else "on top of a tall unit, the feet on a step 1.2 m above the "
+                              "floor", note))
         # people on the open edges of the traps' floor slab, the legs hanging below it into
         # the void past the scan (fooled the judge in kitchen4: nothing under the feet, and
         # the feet 42 cm below the lowest thing scanned around)

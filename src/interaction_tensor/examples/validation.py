@@ -208,7 +208,12 @@ def _judge_traps():
     """Not a validation room (the tuning never sees it): surfaces that fooled an earlier
     filling judge, a narrow bar a few centimetres over a mug that is not in a basin. A
     trestle table whose stretcher runs 16 cm above the floor, and a counter with a towel bar
-    20 cm above its top, 10 cm in from its front edge. :data:`JUDGE_TRAPS` lists where a mug stands under each bar."""
+    20 cm above its top, 10 cm in from its front edge. :data:`JUDGE_TRAPS` lists where a mug stands under each bar.
+    For the sitting judge: the counter's front is flush with its top (a person on its edge
+    has the calves along the front, :func:`flush_counter_edges`); two stepped units, a low
+    one (a seat with a foot rest 20 cm up) and a tall one (its top 1.65 m up, the step 1.2 m:
+    :func:`stepped_unit_seats`); and the floor slab's open +x and +y edges
+    (:func:`floor_edge_seats`)."""
     k = F._Kit()
     k.box((-0.6, -0.3, 0.71), (0.6, 0.3, 0.74))                      # table top
     for x in (-0.5, 0.5):
@@ -221,7 +226,16 @@ def _judge_traps():
         k.box((x - 0.01, -0.21, 0.9), (x + 0.01, -0.19, 1.1))        # bar posts
     k.add(F.rod((-0.5, -0.2, 1.1), (0.5, -0.2, 1.1), 0.012, sections=16))
     counter = k.piece("counter with towel bar", (1.3, 2.6), 0)
-    return _shell((3.0, 3.4)), [table, counter]
+    units = []
+    for name, xy, step in (("tall stepped unit", (3.2, 0.8), 1.2),
+                           ("low stepped unit", (3.2, 1.9), 0.2)):
+        # a block of 0.8 x 1.0 m to ``step`` high, and on its back half a block 0.45 m
+        # higher: a person on the upper block's front edge has the feet on the step
+        k = F._Kit()
+        k.box((-0.4, -0.5, 0.0), (0.4, 0.5, step))
+        k.box((0.0, -0.5, step), (0.4, 0.5, step + 0.45))
+        units.append(k.piece(name, xy, 0))
+    return _shell((4.2, 3.4)), [table, counter] + units
 
 
 def _floorless_traps():
@@ -268,11 +282,22 @@ def flush_counter_edges() -> list:
     return out
 
 
+def stepped_unit_seats() -> list:
+    """Where a person sits on the upper block of :func:`_judge_traps`'s stepped units, facing
+    -x, the feet on the step: [(point on the upper block's front edge (3,), facing angle,
+    step height above the floor m, note)]: on the low unit a seat with a foot rest, on the
+    tall one the top of a 1.65 m unit with the feet 1.2 m above the floor."""
+    return [((3.2, y0 + dy, step + 0.45), math.pi, step, f"{name}, y {dy:+.1f}")
+            for name, y0, step in (("tall stepped unit", 0.8, 1.2),
+                                   ("low stepped unit", 1.9, 0.2))
+            for dy in (-0.3, 0.0, 0.3)]
+
+
 def floor_edge_seats() -> list:
     """Where a person can be posed sitting on the open edges of :func:`_judge_traps`'s floor
     slab (no wall there), facing out, the legs hanging below the floor: [(point on the
     edge (3,), facing angle (radians), note)]."""
-    out = [((3.0, y, 0.0), 0.0, f"floor slab's +x edge, y {y:.1f}") for y in (0.6, 1.8)]
+    out = [((4.2, y, 0.0), 0.0, f"floor slab's +x edge, y {y:.1f}") for y in (0.6, 1.8)]
     out += [((x, 3.4, 0.0), math.pi / 2, f"floor slab's +y edge, x {x:.1f}")
             for x in (0.4, 2.5)]
     return out
