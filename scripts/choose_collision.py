@@ -147,7 +147,7 @@ def main(argv=None) -> int:
                          "case": p.case, "valid": p.valid, "pose": n, "above": _label(above),
                          "separation_m": sep if np.isfinite(sep) else "inf",
                          "through": crossed, "below_ground_m": round(below, 4),
-                         "feet_gap_m": round(gap, 4) if np.isfinite(gap) else "-inf"})
+                         "feet_gap_m": round(gap, 4) if np.isfinite(gap) else str(gap)})
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "labelled_separation.csv", "w", newline="") as fh:

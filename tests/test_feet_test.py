@@ -206,3 +206,20 @@ def test_feet_past_the_edge_of_a_floor_hang_below_the_ground_and_fail(sitting):
                                                           min(s for _, s in
                                                               standing_groups(sitting)),
                                                           abs=0.011)
+
+
+def test_feet_on_a_ledge_high_above_the_ground_fail(sitting):
+    """A stepped unit: a block to 1.2 m with a 0.45 m block on its back half, on a floor. A
+    person on the upper block's front edge has the feet on the 1.2 m step: no drop at all,
+    but a ledge no one climbs to (an infinite gap); the same shape with a 0.2 m step is a
+    seat with a foot rest (within reach of the step or the floor)."""
+    gaps = []
+    for step in (1.2, 0.2):
+        scene = it.prepare_scene(parts_mesh([
+            box_part("floor", (0.0, 0.0, -0.01), (3.0, 3.0, 0.02)),
+            box_part("step", (0.0, 0.0, step / 2), (0.8, 1.0, step)),
+            box_part("upper", (-0.2, 0.0, step + 0.225), (0.4, 1.0, 0.45))]), 0.01, seed=0)
+        # facing +x, the seat 2 cm back from the upper block's front edge (x = 0)
+        point = np.array([[-0.02, 0.0, step + 0.45]])
+        gaps.append(feet_gaps(point, np.zeros(1, np.int64), sitting, scene, 8)[0])
+    assert gaps[0] == np.inf and 0.0 <= gaps[1] <= sitting.feet_reach

@@ -63,6 +63,10 @@ FEET_TOLERANCE = 0.02
 #: the edge of the scan's floor, under everything scanned around (the judge's
 #: ``feet_below_ground``).
 FEET_BELOW_GROUND = 0.05
+#: Highest (m) above the ground a surface the feet stand on may be: higher, it is a ledge no
+#: one climbs to from the floor to sit (the top of a 3 m wall unit with the feet on its
+#: lower ledge; the judge's ``feet_above_ground``).
+FEET_ABOVE_GROUND = 0.6
 #: How far (m) beyond the query object's size the ground is looked for around a placement
 #: (the judge's ``ground_radius``).
 GROUND_RADIUS = 1.5
@@ -247,13 +251,15 @@ def feet_gaps_at(feet: list, scene, ground: np.ndarray, tolerance: float = FEET_
     scan without its floor). ``feet`` holds, per group, ((P, F, 3) posed contact points,
     (P,) posed sole heights). Negative when the sole is below the surface it meets; inf
     when a group with nothing under it is more than :data:`FEET_BELOW_GROUND` below the
-    ground (it hangs past the edge of the scan's floor)."""
+    ground (it hangs past the edge of the scan's floor) or stands on a surface more than
+    :data:`FEET_ABOVE_GROUND` above it (a ledge no one climbs to)."""
     worst = np.full(len(ground), -np.inf)
     for posed, soles in feet:
         top = scene.highest_under(posed[:, :, :2], soles + tolerance)
         none = ~np.isfinite(top)
         gap = soles - np.where(none, ground, top)
         gap[none & (soles < ground - FEET_BELOW_GROUND)] = np.inf
+        gap[~none & (top > ground + FEET_ABOVE_GROUND)] = np.inf
         worst = np.maximum(worst, gap)
     return worst
 

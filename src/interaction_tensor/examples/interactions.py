@@ -397,9 +397,9 @@ ACCEPTANCE: dict = {
                     collision=[(0.01, None)], through=False),     # 30/76 invalid rejected
     "sitting": dict(threshold=0.35, clearance_limit=0.02, interior_limit=0.02,
                     contact=("off", 0.02, 0.1, 90.0),             # 38.0 %, 73.3 % (*)
-                    collision=[(0.05, None), (0.01, 0.0)],        # 58/105: the whole body
+                    collision=[(0.05, None), (0.01, 0.0)],        # 58/108: the whole body
                     through=False, below_ground=0.05,             # 5 cm, above the seat 1 cm;
-                    feet_reach=0.25),                             # ground 62, feet 92/105
+                    feet_reach=0.25),                             # ground 62, feet 95/108
     "hanging": dict(threshold=0.14, clearance_limit=0.05, interior_limit=1.0,
                     contact=("main", 0.02, 0.75, 30.0),           # 45.2 %, 0.8 % (*)
                     collision=[(0.01, None)], through=True,       # 90/95, and with the
