@@ -239,9 +239,10 @@ def case_sitting(scene_name: str, fraction: float, n_patch: int, rounds: int, fu
                                          job.threshold, job.vectors, job.rho)], grid, False)
     kernels.score_jobs([kernels.ScoreJob(job.points[:64], job.orient[:64], job.table,
                                          job.threshold, job.vectors, job.rho)], grid, True)
-    from interaction_tensor.detect import CACHE_AUTO_BYTES_PER_POINT
+    from interaction_tensor.detect import CACHE_AUTO_BYTES_PER_POINT, CACHE_AUTO_FLOOR
 
-    auto_budget = min(kernels.CACHE_BYTES, CACHE_AUTO_BYTES_PER_POINT * len(scene))
+    auto_budget = min(kernels.CACHE_BYTES,
+                      max(CACHE_AUTO_FLOOR, CACHE_AUTO_BYTES_PER_POINT * len(scene)))
     times = {"grid": [], "cache_cold": [], "cache_warm": [], "cache_auto": []}
     same = True
     for _ in range(rounds):

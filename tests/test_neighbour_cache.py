@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import sys
+
 import numpy as np
 import pytest
 
@@ -41,7 +43,6 @@ def test_detection_with_the_cache_decides_alike(monkeypatch):
     """Grid search (False), auto (None: dense test points, so the cache, within a budget
     per scene point that here is ample, forces resets, or leaves no room at all) and a kept
     cache (True) give bit-identical pairs; auto drops its cache when the search ends."""
-    import sys
 
     q, s = corner_example()
     t = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1))
@@ -56,6 +57,8 @@ def test_detection_with_the_cache_decides_alike(monkeypatch):
     plain = run(False)
     assert plain.accepted.any() and not plain.accepted.all()
     budgets = []
+    # tiny budgets (no floor) drop and rebuild the cache's trees: still exact
+    monkeypatch.setattr(sys.modules["interaction_tensor.detect"], "CACHE_AUTO_FLOOR", 0)
     for mode, per_point in ((None, 64), (None, 8), (None, 1), (True, 64)):
         monkeypatch.setattr(sys.modules["interaction_tensor.detect"],
                             "CACHE_AUTO_BYTES_PER_POINT", per_point)
@@ -144,3 +147,25 @@ def test_a_cache_over_its_budget_drops_its_oldest_trees_and_stays_exact():
         roots = c.pool[c.pool >= 0]
         assert np.all(roots < c.used[0])
     assert any(e for e, _ in seen) and any(r for _, r in seen)    # both ways were taken
+
+
+def test_the_auto_cache_has_a_floor_whatever_the_scene_size(monkeypatch):
+    """A small scene's auto cache gets at least CACHE_AUTO_FLOOR bytes (24 bytes a point left
+    a person's search rebuilding its trees), a large one 24 bytes a point, both at most the
+    cache's own limit; the budget reaches the kernels."""
+    det_mod = sys.modules["interaction_tensor.detect"]
+    seen = []
+    real = det_mod._score_all
+
+    def spy(*args, **kwargs):
+        seen.append(args[-1] if len(args) > 8 else kwargs.get("cache_bytes"))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(det_mod, "_score_all", spy)
+    q, s = corner_example()
+    t = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1))
+    scene = it.prepare_scene(s, 0.01, seed=2)
+    it.detect(scene, t, it.DetectSettings(sample_fraction=0.4))
+    assert seen == [det_mod.CACHE_AUTO_FLOOR] and det_mod.CACHE_AUTO_FLOOR >= 32 * 2**20
+    assert det_mod.CACHE_AUTO_BYTES_PER_POINT * 10**8 > kernels.CACHE_BYTES >= \
+        det_mod.CACHE_AUTO_FLOOR

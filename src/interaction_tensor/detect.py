@@ -28,6 +28,11 @@ CACHE_AUTO_FRACTION = 0.1
 #: needed. 24 keeps a 2 M-point cloud at the defaults under 250 bytes a point
 #: (benchmarks/memory.py: 476 MB; 64 gave 616 MB).
 CACHE_AUTO_BYTES_PER_POINT = 24
+#: Least memory of the auto neighbour cache (bytes), whatever the scene's size: below it a
+#: person's far keypoints make the cache drop and rebuild its trees hundreds of times
+#: (sitting-human on office-desk1, 78,197 points: 24 bytes a point, 1.8 MB, scored 3.2x
+#: slower than 64 MB or 512 MB, identical results; 2026-11-26, one thread, quiet machine).
+CACHE_AUTO_FLOOR = 64 * 2**20
 
 if TYPE_CHECKING:   # annotations only: descriptor imports this module to calibrate
     from .descriptor import InteractionTensor
@@ -611,7 +616,8 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     label = tensors[0].affordance if len(tensors) == 1 else f"{len(tensors)} affordances"
     use_cache = backend == "numba" and cache_pays(settings, len(test_idx) / max(len(scene), 1))
     auto = settings.neighbour_cache is None
-    budget = min(CACHE_BYTES, CACHE_AUTO_BYTES_PER_POINT * len(scene)) if auto else CACHE_BYTES
+    budget = (min(CACHE_BYTES, max(CACHE_AUTO_FLOOR, CACHE_AUTO_BYTES_PER_POINT * len(scene)))
+              if auto else CACHE_BYTES)
     scores = _score_all(scene, jobs, backend, index, settings, progress, label, use_cache,
                         budget)
     if use_cache and auto:
