@@ -31,6 +31,20 @@ def shared_file(relative: str) -> Path:
     return path
 
 
+def descriptor_with_header(src, dst, drop: str | None = None, **changes):
+    """Write the descriptor file ``src`` again as ``dst`` with its JSON header's fields
+    changed (``changes``) or one field removed (``drop``: a file from before that field);
+    returns ``dst``."""
+    import json
+
+    with np.load(src) as data:
+        raw = {k: data[k] for k in data.files}
+    header = {k: v for k, v in json.loads(raw["header"].tobytes()).items() if k != drop}
+    raw["header"] = np.frombuffer(json.dumps({**header, **changes}).encode(), np.uint8)
+    np.savez(dst, **raw)
+    return dst
+
+
 def plane(z: float, half: float = 0.1) -> it.Geometry:
     """A square (2 triangles) of side 2*half at height z, normal +Z."""
     v = np.array([[-half, -half, z], [half, -half, z], [half, half, z], [-half, half, z]])

@@ -9,8 +9,6 @@ without one), and the setting's file round trip.
 
 from __future__ import annotations
 
-import json
-
 import numpy as np
 import pytest
 from hypothesis import given
@@ -22,6 +20,8 @@ from interaction_tensor.clearance import (FAILS_FEET, PLACED, check_placements, 
 from interaction_tensor.errors import InputError
 from interaction_tensor.examples import interactions
 from interaction_tensor.examples.procedural import box_part, parts_mesh
+
+from conftest import descriptor_with_header
 
 #: only the feet test decides
 FEET_ONLY = dict(clearance=False, contact=False, interior=False, ground=False)
@@ -154,19 +154,12 @@ def test_the_feet_setting_survives_a_file_and_a_bad_one_is_refused(sitting, tmp_
     for wrong in (-0.01, 2.0, "on", True):
         with pytest.raises(ValueError, match="feet_reach"):
             tensor.set_acceptance(tensor.threshold(), feet_reach=wrong)
-    with np.load(tmp_path / "f.npz") as data:
-        raw = {k: data[k] for k in data.files}
-    header = json.loads(raw["header"].tobytes())
     for name, value in (("a.npz", "far"), ("b.npz", -1.0), ("c.npz", 3.0)):
-        raw["header"] = np.frombuffer(json.dumps({**header, "feet_reach": value}).encode(),
-                                      np.uint8)
-        np.savez(tmp_path / name, **raw)
+        descriptor_with_header(tmp_path / "f.npz", tmp_path / name, feet_reach=value)
         with pytest.raises(InputError, match="feet_reach"):
             it.InteractionTensor.load(tmp_path / name)
-    old = {k: v for k, v in header.items() if k != "feet_reach"}   # a file of before
-    raw["header"] = np.frombuffer(json.dumps(old).encode(), np.uint8)
-    np.savez(tmp_path / "old.npz", **raw)
-    assert it.InteractionTensor.load(tmp_path / "old.npz").feet_reach is None
+    old = descriptor_with_header(tmp_path / "f.npz", tmp_path / "old.npz", drop="feet_reach")
+    assert it.InteractionTensor.load(old).feet_reach is None
 
 
 def test_a_face_beside_the_shins_is_not_something_to_stand_on(sitting):

@@ -18,6 +18,16 @@ def poses():
     return labelled.load()
 
 
+@pytest.fixture(scope="module")
+def sitting_traps():
+    """The sitting example, the judge-only traps scene and the sitting judge."""
+    from interaction_tensor.evaluation.judge import Judge, JudgeScene
+    from interaction_tensor.examples import interactions, validation
+
+    ex = interactions.build("sitting-human", _objects())
+    return ex, JudgeScene(validation.build_scene("judge_traps").geometry), Judge.for_example(ex)
+
+
 def _objects():
     objects = SHARED_DATA / "objects"
     if not (objects / "ycb_mug.ply").exists():
@@ -147,37 +157,32 @@ def test_a_person_on_a_high_tops_edge_has_the_feet_in_the_air(poses):
         assert v.feet_gap > 0.4
 
 
-def test_a_person_with_the_calves_along_a_flush_front_has_nothing_to_stand_on(poses):
+def test_a_person_with_the_calves_along_a_flush_front_has_nothing_to_stand_on(poses, sitting_traps):
     """The people on the judge traps' flush-fronted counter: the front's vertical face lies
     under the heels' margin; a judge that stood the feet on any surface passed all of them
     (as it passed office-desk1's person on a desk with the legs down its side panel); the
     judge that asks for a surface one can stand on rejects them for the feet alone."""
-    from interaction_tensor.evaluation.judge import Judge, JudgeScene, JudgeSettings
-    from interaction_tensor.examples import interactions, validation
+    from interaction_tensor.evaluation.judge import Judge, JudgeSettings
 
     flush = [p for p in poses if "flush-fronted" in p.case]
     assert len(flush) >= 5 and not any(p.valid for p in flush)
-    ex = interactions.build("sitting-human", _objects())
-    scene = JudgeScene(validation.build_scene("judge_traps").geometry)
-    judge, any_surface = Judge.for_example(ex), Judge.for_example(ex, JudgeSettings(stand_angle=91))
+    ex, scene, judge = sitting_traps
+    any_surface = Judge.for_example(ex, JudgeSettings(stand_angle=91))
     for p in flush:
         v = judge.judge(scene, np.asarray(p.pose))
         assert v.reasons == ["feet out of reach of the floor"] and v.feet_gap > 0.4
         assert any_surface.judge(scene, np.asarray(p.pose)).valid
 
 
-def test_a_person_on_a_floors_open_edge_hangs_the_legs_below_everything(poses):
+def test_a_person_on_a_floors_open_edge_hangs_the_legs_below_everything(poses, sitting_traps):
     """The people on the open edge of the judge traps' floor slab: nothing under the feet and
     the soles 37.5 cm below the lowest thing scanned around (kitchen4's top seats on the edge
     of the scan's floor); a judge that let such feet stand on the ground passed them."""
-    from interaction_tensor.evaluation.judge import Judge, JudgeScene, JudgeSettings
-    from interaction_tensor.examples import interactions, validation
+    from interaction_tensor.evaluation.judge import Judge, JudgeSettings
 
     edge = [p for p in poses if p.case == "on a floor's open edge, legs hanging below it"]
     assert len(edge) >= 4 and not any(p.valid for p in edge)
-    ex = interactions.build("sitting-human", _objects())
-    scene = JudgeScene(validation.build_scene("judge_traps").geometry)
-    judge = Judge.for_example(ex)
+    ex, scene, judge = sitting_traps
     lenient = Judge.for_example(ex, JudgeSettings(feet_below_ground=10.0))
     for p in edge:
         v = judge.judge(scene, np.asarray(p.pose))
@@ -185,19 +190,17 @@ def test_a_person_on_a_floors_open_edge_hangs_the_legs_below_everything(poses):
         assert lenient.judge(scene, np.asarray(p.pose)).valid
 
 
-def test_feet_on_a_step_high_above_the_floor_are_no_seat_and_a_foot_rest_is(poses):
+def test_feet_on_a_step_high_above_the_floor_are_no_seat_and_a_foot_rest_is(poses,
+                                                                            sitting_traps):
     """The judge traps' stepped units: on the low one the feet rest on a step 20 cm above the
     floor (a seat with a foot rest: valid); on the tall one they rest on a step 1.2 m up, on
     top of a 1.65 m unit no one climbs to sit on (living-room4's top seats, on a 3 m wall
     unit): a judge that took any step for a floor passed them."""
-    from interaction_tensor.evaluation.judge import Judge, JudgeScene, JudgeSettings
-    from interaction_tensor.examples import interactions, validation
+    from interaction_tensor.evaluation.judge import Judge, JudgeSettings
 
     steps = [p for p in poses if "step" in p.case and p.scene == "validation:judge_traps"]
     assert sum(p.valid for p in steps) >= 3 and sum(not p.valid for p in steps) >= 3
-    ex = interactions.build("sitting-human", _objects())
-    scene = JudgeScene(validation.build_scene("judge_traps").geometry)
-    judge = Judge.for_example(ex)
+    ex, scene, judge = sitting_traps
     lenient = Judge.for_example(ex, JudgeSettings(feet_above_ground=100.0))
     for p in steps:
         v = judge.judge(scene, np.asarray(p.pose))

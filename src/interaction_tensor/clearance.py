@@ -291,7 +291,7 @@ def feet_gaps_poses(poses, tensor, scene) -> np.ndarray:
     feet = []
     for g, sole in groups:
         posed = np.einsum("pij,fj->pfi", poses[:, :3, :3], g) + poses[:, None, :3, 3]
-        feet.append((posed, posed[:, :, 2].min(axis=1) - (g[:, 2].min() - sole)))
+        feet.append((posed, posed[:, :, 2].min(axis=1)))      # the sole: its lowest point
     return feet_gaps_at(feet, scene, ground)
 
 
