@@ -25,6 +25,8 @@ from interaction_tensor.examples import interactions
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.predictions import top_k
 
+from conftest import descriptor_with_header
+
 #: every pair accepted by score and the sampled placement tests off: only collision decides
 OPEN = dict(threshold=1e-3, clearance=False, contact=False, interior=False, ground=False,
             top_k=3)
@@ -303,8 +305,6 @@ def test_a_hanger_hooked_below_the_floor_line_fails_the_ground_test(hanging):
 
 
 def test_the_ground_setting_survives_a_file_and_a_bad_one_is_refused(hanging, tmp_path):
-    import json
-
     _, tensor = hanging
     assert tensor.below_ground == 0.01 and tensor.acceptance()["below_ground"] == 0.01
     tensor.set_acceptance(tensor.threshold(), below_ground=0.03)
@@ -315,16 +315,9 @@ def test_the_ground_setting_survives_a_file_and_a_bad_one_is_refused(hanging, tm
     for wrong in (-0.01, 2.0, "on", True):
         with pytest.raises(ValueError):
             tensor.set_acceptance(tensor.threshold(), below_ground=wrong)
-    with np.load(tmp_path / "g.npz") as data:
-        raw = {k: data[k] for k in data.files}
-    header = json.loads(raw["header"].tobytes())
     for name, value in (("a.npz", "deep"), ("b.npz", -1.0)):
-        raw["header"] = np.frombuffer(json.dumps({**header, "below_ground": value}).encode(),
-                                      np.uint8)
-        np.savez(tmp_path / name, **raw)
+        descriptor_with_header(tmp_path / "g.npz", tmp_path / name, below_ground=value)
         with pytest.raises(InputError, match="below_ground"):
             it.InteractionTensor.load(tmp_path / name)
-    old = {k: v for k, v in header.items() if k != "below_ground"}   # a file of before
-    raw["header"] = np.frombuffer(json.dumps(old).encode(), np.uint8)
-    np.savez(tmp_path / "old.npz", **raw)
-    assert it.InteractionTensor.load(tmp_path / "old.npz").below_ground is None
+    old = descriptor_with_header(tmp_path / "g.npz", tmp_path / "old.npz", drop="below_ground")
+    assert it.InteractionTensor.load(old).below_ground is None
