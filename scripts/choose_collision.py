@@ -25,6 +25,14 @@ top of the kept option and ground test: kept is the reach that rejects the most 
 poses among those that keep every valid one, ties to the larger reach (the more lenient),
 and only when it rejects more than the option alone.
 
+Then, for riding (the affordances whose judge asks for a support between the legs), the
+straddle test (``clearance.straddle_passes_poses``: the scene in the astride box ahead of
+the seat, none in a legroom box on either side; ``STRADDLE_OPTIONS``) on top of all that:
+kept is the option that rejects the most invalid poses among those that keep every valid
+one, ties to the option with the astride box, then to the wider legroom boxes (the more
+space tested, as the collision tests' ties go to testing more of the query), and only when
+it rejects more than the tests before it.
+
     python scripts/choose_collision.py --objects ../shared/data/objects \\
         --shared ../shared/data -o docs/results/collision
 """
@@ -39,9 +47,11 @@ from pathlib import Path
 import numpy as np
 
 from interaction_tensor import collision
-from interaction_tensor.clearance import below_ground, feet_gaps_poses, standing_groups
+from interaction_tensor.clearance import (below_ground, feet_gaps_poses, standing_groups,
+                                         straddle_passes_poses)
 from interaction_tensor.scene import prepare_scene
 from interaction_tensor.evaluation import labelled
+from interaction_tensor.evaluation.judge import TESTS
 from interaction_tensor.examples import interactions, validation
 from interaction_tensor.io import load_geometry
 
@@ -50,6 +60,27 @@ DEPTHS = (0.01, 0.02, 0.05, 0.1, 0.2)
 GROUND_DEPTHS = (0.01, 0.02, 0.05, 0.1)
 FEET_REACHES = (0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5)
 AFFORDANCES = ("placing", "sitting", "hanging", "filling", "riding")
+#: The straddle test's boxes (m, training frame, relative to the seat point; x ahead): the
+#: astride box (6 cm wide, 12-32 cm ahead of the seat, 30 cm below to 2 cm above it) and
+#: legroom boxes on either side (10 cm behind to 20 cm ahead of the seat, 14 cm below to 2
+#: cm above it) at each lateral range (m from the mid-plane) of ``STRADDLE_LATERAL``.
+ASTRIDE_BOX = ((0.12, 0.32), (-0.03, 0.03), (-0.30, 0.02))
+LEGROOM_ALONG, LEGROOM_HEIGHT = (-0.10, 0.20), (-0.14, 0.02)
+STRADDLE_LATERAL = ((0.22, 0.30), (0.20, 0.32), (0.18, 0.35), (0.16, 0.35), (0.18, 0.40),
+                    (0.16, 0.40))
+
+
+def straddle_option(astride: bool, lateral) -> dict:
+    """The descriptor's ``straddle`` of one option (astride box or not, legroom lateral range
+    or None)."""
+    legroom = [] if lateral is None else [
+        (LEGROOM_ALONG, (side * lateral[0], side * lateral[1])[::side], LEGROOM_HEIGHT)
+        for side in (1, -1)]
+    return {"astride": ASTRIDE_BOX if astride else None, "legroom": legroom}
+
+
+STRADDLE_OPTIONS = [(a, lat) for a in (True, False) for lat in (None,) + STRADDLE_LATERAL
+                    if a or lat is not None]
 
 
 def _label(above) -> str:
@@ -86,23 +117,27 @@ def options(rows: list) -> list:
 
 
 def passes(rows: list, tests, through: bool):
-    """(valid, passes the option, below ground m, {reach: stands}) per pose of one
-    affordance's rows."""
+    """(valid, passes the option, below ground m, {reach: stands}, {straddle option:
+    passes}) per pose of one affordance's rows."""
     poses = sorted({r["pose"] for r in rows})
     index = {p: k for k, p in enumerate(poses)}
     valid = np.zeros(len(poses), bool)
     ok = np.ones(len(poses), bool)
     below = np.zeros(len(poses))
     gap = np.zeros(len(poses))
+    straddle = {o: np.ones(len(poses), bool) for o in STRADDLE_OPTIONS}
     for r in rows:
         k = index[r["pose"]]
+        for a, lat in STRADDLE_OPTIONS:
+            if r[f"straddle {a} {lat}"] is False:
+                straddle[(a, lat)][k] = False
         valid[k], below[k], gap[k] = r["valid"], r["below_ground_m"], float(r["feet_gap_m"])
         if through and not r["through"]:
             ok[k] = False
         for above, depth in tests:
             if r["above"] == _label(above) and float(r["separation_m"]) > depth:
                 ok[k] = False
-    return valid, ok, below, {f: gap <= f for f in FEET_REACHES}
+    return valid, ok, below, {f: gap <= f for f in FEET_REACHES}, straddle
 
 
 def main(argv=None) -> int:
@@ -137,6 +172,13 @@ def main(argv=None) -> int:
             examples_of[p.affordance] = tensor
         bodies, through, tensor = examples[p.example]
         pose = np.asarray(p.pose, float)
+        straddles = {}
+        if "astride" in TESTS[p.affordance]:
+            for a, lat in STRADDLE_OPTIONS:
+                tensor.set_acceptance(tensor.threshold(), straddle=straddle_option(a, lat))
+                straddles[f"straddle {a} {lat}"] = bool(
+                    straddle_passes_poses(pose[None], tensor, scenes[p.scene])[0])
+            tensor.set_acceptance(tensor.threshold(), straddle="off")
         crossed = through is not None and colliders[p.scene].collides(through, pose)
         at = (pose[:3, :3] @ tensor.reference_point + pose[:3, 3])[None]
         below = float(below_ground(at, tensor, scenes[p.scene])[0])
@@ -147,7 +189,9 @@ def main(argv=None) -> int:
                          "case": p.case, "valid": p.valid, "pose": n, "above": _label(above),
                          "separation_m": sep if np.isfinite(sep) else "inf",
                          "through": crossed, "below_ground_m": round(below, 4),
-                         "feet_gap_m": round(gap, 4) if np.isfinite(gap) else str(gap)})
+                         "feet_gap_m": round(gap, 4) if np.isfinite(gap) else str(gap),
+                         **{k: straddles.get(k, "") for k in
+                            (f"straddle {a} {lat}" for a, lat in STRADDLE_OPTIONS)}})
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     with open(out / "labelled_separation.csv", "w", newline="") as fh:
@@ -195,10 +239,17 @@ def main(argv=None) -> int:
                   "standing contacts):", "",
                   "| affordance | feet reach m | valid kept | invalid rejected | chosen |",
                   "|---|---:|---:|---:|:---:|"]
+    straddle_choice = {}
+    straddle_table = ["", "The straddle test added to the kept option and ground test (the "
+                      "affordances whose judge asks for a support between the legs; astride "
+                      f"box {ASTRIDE_BOX}, legroom boxes {LEGROOM_ALONG} along and "
+                      f"{LEGROOM_HEIGHT} high, m from the seat point):", "",
+                      "| affordance | astride box | legroom lateral m | valid kept | invalid "
+                      "rejected | chosen |", "|---|:---:|---|---:|---:|:---:|"]
     for aff, o in chosen.items():
         if o is None:
             continue
-        valid, ok, below, feet = passes([r for r in rows if r["affordance"] == aff], o[0],
+        valid, ok, below, feet, straddle = passes([r for r in rows if r["affordance"] == aff], o[0],
                                         o[1])
         base = int((~ok[~valid]).sum())
         ground[aff] = None
@@ -211,10 +262,27 @@ def main(argv=None) -> int:
             table.append(f"| {aff} | {g:g} | {kept}/{int(valid.sum())} | {rejected}/"
                          f"{int((~valid).sum())} (option alone {base}) | "
                          f"{'**yes**' if take else ''} |")
+        okg = ok & (below <= ground[aff]) if ground[aff] is not None else ok
+        if "astride" in TESTS[aff]:
+            base_s = int((~okg[~valid]).sum())
+            tried = [(o, int((okg & straddle[o])[valid].sum()),
+                      int((~(okg & straddle[o]))[~valid].sum())) for o in STRADDLE_OPTIONS]
+            good = [t for t in tried if t[1] == int(valid.sum()) and t[2] > base_s]
+            best_s = max(good, key=lambda t: (t[2], t[0][0],
+                                              0 if t[0][1] is None else
+                                              t[0][1][1] - t[0][1][0],
+                                              0 if t[0][1] is None else -t[0][1][0]))[0] \
+                if good else None
+            straddle_choice[aff] = best_s
+            for o, kept, rejected in tried:
+                straddle_table.append(
+                    f"| {aff} | {'yes' if o[0] else ''} | "
+                    f"{'' if o[1] is None else f'{o[1][0]:g}-{o[1][1]:g}'} | "
+                    f"{kept}/{int(valid.sum())} | {rejected}/{int((~valid).sum())} "
+                    f"(without it {base_s}) | {'**yes**' if o == best_s else ''} |")
         if not standing_groups(examples_of[aff]):
             feet_choice[aff] = None
             continue
-        okg = ok & (below <= ground[aff]) if ground[aff] is not None else ok
         base_g = int((~okg[~valid]).sum())
         tried = []
         for f in FEET_REACHES:
@@ -231,8 +299,10 @@ def main(argv=None) -> int:
         lines.append(f"- {aff}: " + ("none keeps every valid pose" if o is None else
                                      "collision=" + repr([(d, a) for a, d in o[0]]) +
                                      f", through={o[1]}, below_ground={ground.get(aff)}"
-                                     f", feet_reach={feet_choice.get(aff)}"))
-    lines += table + feet_table
+                                     f", feet_reach={feet_choice.get(aff)}"
+                                     + (f", straddle={straddle_option(*straddle_choice[aff])}"
+                                        if straddle_choice.get(aff) else "")))
+    lines += table + feet_table + straddle_table
     (out / "choice.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0

@@ -56,6 +56,13 @@ FAILS_GROUND = 5
 #: A placement whose standing contacts (a seated person's feet) find nothing to stand on
 #: within the descriptor's ``feet_reach`` below them (:func:`feet_gaps`).
 FAILS_FEET = 6
+#: A placement with nothing going on between the legs ahead of the seat, or with the scene
+#: where a leg goes on either side of it: the descriptor's ``straddle`` boxes
+#: (:func:`straddle_passes`; riding).
+FAILS_STRADDLE = 7
+#: Spacing (m) of the lattice that stands for a straddle box: the columns of the scene's
+#: column index (2 cm) that hold one of its points are the box's footprint.
+STRADDLE_LATTICE = 0.02
 #: How far (m) above a sole a surface may be and still be what the foot stands on (the
 #: judge's contact tolerance).
 FEET_TOLERANCE = 0.02
@@ -295,12 +302,64 @@ def feet_gaps_poses(poses, tensor, scene) -> np.ndarray:
     return feet_gaps_at(feet, scene, ground)
 
 
+def box_lattice(box, spacing: float = STRADDLE_LATTICE) -> np.ndarray:
+    """(L, 2) a lattice over a box's footprint ``((x0, x1), (y0, y1), ...)`` at most
+    ``spacing`` apart, edges included."""
+    (x0, x1), (y0, y1) = box[0], box[1]
+    xs = np.linspace(x0, x1, int(np.ceil((x1 - x0) / spacing)) + 1)
+    ys = np.linspace(y0, y1, int(np.ceil((y1 - y0) / spacing)) + 1)
+    return np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1).reshape(-1, 2)
+
+
+def straddle_passes_at(rot: np.ndarray, at: np.ndarray, straddle: dict, scene) -> np.ndarray:
+    """(P,) whether placements pass the straddle test: a scene sample in the ``astride`` box
+    and none in a ``legroom`` box (:attr:`~.descriptor.InteractionTensor.straddle`; boxes
+    relative to the reference point, training frame), the placement turning the boxes by
+    ``rot`` (P, 2, 2) about +Z and moving them to ``at`` (P, 3), the posed reference
+    point. A box is the 2 cm columns holding a point of its :func:`box_lattice` between its
+    heights (:meth:`~.scene.Scene.occupied`)."""
+    at = np.asarray(at, float).reshape(-1, 3)
+    ok = np.ones(len(at), bool)
+    boxes = ([(straddle["astride"], True)] if straddle.get("astride") is not None else []) + \
+        [(b, False) for b in straddle.get("legroom", ())]
+    for box, wanted in boxes:
+        todo = np.flatnonzero(ok)
+        if len(todo) == 0:
+            break
+        xy = np.einsum("pij,lj->pli", rot[todo], box_lattice(box)) + at[todo, None, :2]
+        hit = scene.occupied(xy, at[todo, 2] + box[2][0], at[todo, 2] + box[2][1])
+        ok[todo[hit != wanted]] = False
+    return ok
+
+
+def straddle_passes(points, orient, tensor, scene, n_orientations: int) -> np.ndarray:
+    """(P,) :func:`straddle_passes_at` of placements (test points (P, 3) at the reference
+    point, orientation indices (P,)); all True for a descriptor without the test."""
+    points = np.asarray(points, float).reshape(-1, 3)
+    if tensor.straddle is None or len(points) == 0:
+        return np.ones(len(points), bool)
+    rot = rotation_z(2 * np.pi * np.arange(n_orientations) / n_orientations)[:, :2, :2]
+    return straddle_passes_at(rot[np.asarray(orient, np.int64)], points, tensor.straddle,
+                              scene)
+
+
+def straddle_passes_poses(poses, tensor, scene) -> np.ndarray:
+    """(P,) :func:`straddle_passes_at` of placements given as 4x4 poses (P, 4, 4) of the
+    training-frame query (a turn about +Z and a move: the judge's labelled poses)."""
+    poses = np.asarray(poses, float).reshape(-1, 4, 4)
+    if tensor.straddle is None or len(poses) == 0:
+        return np.ones(len(poses), bool)
+    at = np.einsum("pij,j->pi", poses[:, :3, :3], tensor.reference_point) + poses[:, :3, 3]
+    return straddle_passes_at(poses[:, :2, :2], at, tensor.straddle, scene)
+
+
 def check_placements(points, orient, tensor, settings, scene, grid=None):
     """The placement tests of pairs the score accepted, in order: clearance (every pair),
     contact (those that kept their clearance), interior (those that also kept their
     contact), ground (when the descriptor has ``below_ground``: the query object no deeper
     than that below the scene's ground), feet (when the descriptor has ``feet_reach``: its
-    standing contacts find something to stand on, :func:`feet_gaps`).
+    standing contacts find something to stand on, :func:`feet_gaps`), straddle (when the
+    descriptor has ``straddle``: :func:`straddle_passes`).
 
     Parameters
     ----------
@@ -344,6 +403,10 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
     if settings.feet and tensor.feet_reach is not None and len(todo):
         gaps = feet_gaps(points[todo], orient[todo], tensor, scene, n_o)
         outcome[todo[gaps > tensor.feet_reach]] = FAILS_FEET
+    todo = np.flatnonzero(outcome == PLACED)
+    if settings.straddle and tensor.straddle is not None and len(todo):
+        ok = straddle_passes(points[todo], orient[todo], tensor, scene, n_o)
+        outcome[todo[~ok]] = FAILS_STRADDLE
     return viol, outcome
 
 

@@ -70,6 +70,9 @@ def detection_options(p) -> None:
     p.add_argument("--no-feet", action="store_true",
                    help="skip the feet test (what stood on the example's ground, a seated "
                         "person's feet, finds something to stand on)")
+    p.add_argument("--no-straddle", action="store_true",
+                   help="skip the straddle test (a rider: something between the legs, room "
+                        "for a leg on each side)")
     p.add_argument("--no-collision", action="store_true",
                    help="skip the collision test of the top predictions (a mesh scene's "
                         "triangles against the query's, python-fcl)")
@@ -179,6 +182,7 @@ def _detect_settings(args):
     return DetectSettings(early_exit=not args.no_early_exit, clearance=not args.no_clearance,
                           contact=not args.no_contact, interior=not args.no_interior,
                           ground=not args.no_ground, feet=not args.no_feet,
+                          straddle=not args.no_straddle,
                           collision=not args.no_collision,
                           **{field: getattr(args, dest) for field, dest in _SETTING_OPTIONS.items()})
 
@@ -234,7 +238,8 @@ def _report(args, result, outdir) -> None:
                f"score accepted (placement tests failed: clearance "
                f"{st['pairs_failing_clearance']}, contact {st['pairs_failing_contact']}, "
                f"interior {st['pairs_failing_interior']}, ground "
-               f"{st['pairs_failing_ground']}, feet {st['pairs_failing_feet']})")
+               f"{st['pairs_failing_ground']}, feet {st['pairs_failing_feet']}, straddle "
+               f"{st['pairs_failing_straddle']})")
     if st["collision_test"] == "on":
         spent = " (the tests allowed are spent: fewer predictions)" \
             if st["collision_tests_exhausted"] else ""
@@ -267,6 +272,7 @@ def summary(result, outdir) -> dict:
             "pairs_accepted_by_score": st["pairs_accepted_by_score"],
             **{k: st[k] for k in ("pairs_failing_clearance", "pairs_failing_contact",
                                   "pairs_failing_interior", "pairs_failing_ground", "pairs_failing_feet",
+                                  "pairs_failing_straddle",
                                   "collision_test", "collision_tests",
                                   "pairs_failing_collision", "pairs_with_nothing_through")},
             "candidates_per_second": st.get("candidates_per_second"),

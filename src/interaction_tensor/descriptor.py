@@ -156,6 +156,12 @@ class InteractionTensor:
         that stood on the example's ground: a seated person's feet) find no scene surface
         within this (m) below them, nor the scene's ground (a person on a counter top with
         the feet in the air); None: no such test
+    straddle : detection's straddle test (riding), or None: ``{"astride": box or None,
+        "legroom": [box, ...]}``, boxes ``((x0, x1), (y0, y1), (z0, z1))`` (m, training frame,
+        relative to the reference point, turning with the placement): the scene must have
+        a sample in the ``astride`` box (something going on between the legs ahead of the
+        seat) and none in a ``legroom`` box (room for a leg on each side)
+        (:func:`.clearance.straddle_passes`)
     scene_points : (S, 3) scene-object samples used for the Voronoi step (subsampled)
     scene_spacing : spacing (m) of the scene-object samples; detection samples at it
     vectors : ``surface`` or ``points``, how provenance (and test) vectors are measured
@@ -199,6 +205,7 @@ class InteractionTensor:
     ground: float | None = None
     below_ground: float | None = None
     feet_reach: float | None = None
+    straddle: dict | None = None
     thresholds: dict = field(default_factory=dict)
     self_scores: dict = field(default_factory=dict)
     meta: dict = field(default_factory=dict)
@@ -219,7 +226,8 @@ class InteractionTensor:
                        collision: tuple | list | str | None = None,
                        through: bool | None = None,
                        below_ground: float | str | None = None,
-                       feet_reach: float | str | None = None) -> None:
+                       feet_reach: float | str | None = None,
+                       straddle: dict | str | None = None) -> None:
         """Accept placements scoring at least ``threshold`` (both keypoint sets, paper
         criterion), violating at most ``clearance_limit`` of the clearance points and
         ``interior_limit`` of the interior points, and keeping their contact (``contact`` =
@@ -230,8 +238,9 @@ class InteractionTensor:
         placements (:attr:`collision_tests`; above None: the whole query), ``"off"`` removes
         them; ``through`` turns the through-the-hook test on or off (:attr:`through`);
         ``below_ground`` (m) sets the ground test (:attr:`below_ground`) and ``feet_reach``
-        (m) the feet test (:attr:`feet_reach`), ``"off"`` removes either. Arguments left
-        None keep their value."""
+        (m) the feet test (:attr:`feet_reach`), ``straddle`` (a dict of boxes) the straddle
+        test (:attr:`straddle`), ``"off"`` removes any of them. Arguments left None keep their
+        value."""
         if not 0 < threshold <= 1:
             raise ValueError("threshold must be in (0, 1]")
         for name, value in (("clearance_limit", clearance_limit),
@@ -248,6 +257,9 @@ class InteractionTensor:
             if value is not None and not (isinstance(value, str) and value == "off"):
                 if isinstance(value, (str, bool)) or not 0 <= float(value) <= 1:
                     raise ValueError(f"{name} must be a depth in [0, 1] m or 'off'")
+        boxes = None
+        if straddle is not None and not (isinstance(straddle, str) and straddle == "off"):
+            boxes = straddle_boxes(straddle)
         tests = None
         if collision is not None:
             tests = () if isinstance(collision, str) and collision == "off" else \
@@ -270,6 +282,8 @@ class InteractionTensor:
             self.below_ground = None if isinstance(below_ground, str) else float(below_ground)
         if feet_reach is not None:
             self.feet_reach = None if isinstance(feet_reach, str) else float(feet_reach)
+        if straddle is not None:
+            self.straddle = boxes
         self.__dict__.pop("_collision_bodies", None)
         self.__dict__.pop("_through_body", None)
 
@@ -313,7 +327,7 @@ class InteractionTensor:
                 "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
                 "collision_tests": [list(t) for t in self.collision_tests],
                 "through": self.through, "below_ground": self.below_ground,
-                "feet_reach": self.feet_reach}
+                "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle)}
 
     def pose(self, position, angle: float) -> np.ndarray:
         """4x4 pose taking the training-frame query object to ``position`` at ``angle``."""
@@ -534,7 +548,7 @@ class InteractionTensor:
             "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
             "collision_tests": [list(t) for t in self.collision_tests], "through": self.through,
             "ground": self.ground, "below_ground": self.below_ground,
-            "feet_reach": self.feet_reach,
+            "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle),
             "thresholds": self.thresholds, "self_scores": self.self_scores, "meta": self.meta,
         }
         arrays = {
@@ -614,7 +628,7 @@ class InteractionTensor:
             collision_tests=header["collision_tests"], through=header["through"],
             through_section=arrays["through_section"],
             ground=header["ground"], below_ground=header["below_ground"],
-            feet_reach=header["feet_reach"],
+            feet_reach=header["feet_reach"], straddle=header["straddle"],
             thresholds=header["thresholds"],
             self_scores=header["self_scores"], meta=header["meta"])
         return tensor
@@ -652,7 +666,7 @@ class InteractionTensor:
                           or "off"),
             "through": ({"on": self.through, "section_vertices": int(len(self.through_section))}),
             "ground": self.ground, "below_ground": self.below_ground,
-            "feet_reach": self.feet_reach,
+            "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle),
             "thresholds": self.thresholds, "self_scores": self.self_scores,
             "meta": self.meta,
         }
@@ -786,6 +800,12 @@ def validate_descriptor(path, header: dict, arrays: dict):
     feet = header.get("feet_reach")
     if feet is not None:
         feet = number("feet_reach", 0.0, 1.0)
+    straddle = header.get("straddle")
+    if straddle is not None:
+        try:
+            straddle = straddle_boxes(straddle)
+        except (TypeError, ValueError) as exc:
+            bad("straddle", str(exc))
     if "collision_tests" in header:
         try:
             tests = collision_tests(header["collision_tests"])
@@ -829,7 +849,8 @@ def validate_descriptor(path, header: dict, arrays: dict):
               "collision_tests": tests, "through": through,
               "ground": None if ground is None else float(ground),
               "below_ground": None if below is None else float(below),
-              "feet_reach": None if feet is None else float(feet), "meta": meta}
+              "feet_reach": None if feet is None else float(feet), "straddle": straddle,
+              "meta": meta}
     return header, out
 
 
@@ -1061,3 +1082,43 @@ def collision_tests(value) -> tuple:
                              "in [0, 1] m, above: None or a height in [-10, 10] m)")
         tests.append((float(depth), None if above is None else float(above)))
     return tuple(tests)
+
+
+def straddle_boxes(value) -> dict:
+    """The straddle test's boxes (:attr:`InteractionTensor.straddle`) from ``{"astride": box
+    or None, "legroom": [box, ...]}``, checked: each box ``((x0, x1), (y0, y1), (z0, z1))``
+    of finite numbers with x0 < x1 (and so on) within 5 m of the reference point, at most 8
+    legroom boxes, at least one box in all. Raises ValueError."""
+    if not isinstance(value, dict) or not set(value) <= {"astride", "legroom"}:
+        raise ValueError("must be {'astride': box or None, 'legroom': [box, ...]}")
+
+    def box(b):
+        try:
+            arr = np.asarray(b, float)
+        except (TypeError, ValueError):
+            arr = np.zeros(0)
+        if arr.shape != (3, 2) or not np.isfinite(arr).all() or \
+                not (arr[:, 0] < arr[:, 1]).all() or np.abs(arr).max() > 5:
+            raise ValueError(f"box {b!r} must be ((x0, x1), (y0, y1), (z0, z1)) m with each "
+                             "low < high, within 5 m of the reference point")
+        return tuple((float(lo), float(hi)) for lo, hi in arr)
+
+    astride = value.get("astride")
+    legroom = value.get("legroom") or []
+    if isinstance(legroom, (str, bytes, dict)) or not hasattr(legroom, "__len__") or \
+            len(legroom) > 8:
+        raise ValueError("legroom must be a list of at most 8 boxes")
+    out = {"astride": None if astride is None else box(astride),
+           "legroom": tuple(box(b) for b in legroom)}
+    if out["astride"] is None and not out["legroom"]:
+        raise ValueError("needs an astride box or a legroom box")
+    return out
+
+
+def _boxes_json(straddle):
+    """The straddle boxes as JSON lists (None without the test)."""
+    if straddle is None:
+        return None
+    return {"astride": None if straddle["astride"] is None
+            else [list(r) for r in straddle["astride"]],
+            "legroom": [[list(r) for r in b] for b in straddle["legroom"]]}

@@ -214,6 +214,10 @@ class DetectSettings:
     #: (a seated person's feet) finds a scene surface at most that far below it, or the
     #: scene's ground (a person on a counter top with the feet in the air; ours).
     feet: bool = True
+    #: Straddle test (when the descriptor has ``straddle``: riding): the scene goes on
+    #: between the legs ahead of the seat and leaves room for a leg on each side (a bench
+    #: crossed sideways, a wide seat or a bed fails; ours).
+    straddle: bool = True
     interior_tolerance: float = 0.01
     #: Collision test (when the scene is a triangle mesh, ``Scene.mesh``, and the descriptor
     #: has a collision depth): a placement that reaches the top k is moved into the scene

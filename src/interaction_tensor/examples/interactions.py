@@ -389,9 +389,9 @@ def _rider_and_bike(rider: Geometry, seed: int):
 ACCEPTANCE: dict = {
     # precision and recall of the pair decisions on the validation pairs (tuning.md); the
     # collision tests [(depth, above)] of ranked placements, the through test, the ground
-    # test and the feet test chosen on the judge's labelled set: every valid pose kept, the
-    # most invalid ones rejected (scripts/choose_collision.py, docs/results/collision/
-    # choice.md)
+    # test, the feet test and the straddle test chosen on the judge's labelled set: every
+    # valid pose kept, the most invalid ones rejected (scripts/choose_collision.py,
+    # docs/results/collision/choice.md)
     "placing": dict(threshold=0.03, clearance_limit=0.05, interior_limit=0.02,
                     contact=("main", 0.02, 0.9, 90.0),            # 99.2 %, 95.0 %
                     collision=[(0.01, None)], through=False),     # 30/76 invalid rejected
@@ -409,8 +409,11 @@ ACCEPTANCE: dict = {
                     collision=[(0.01, None)], through=True),      # 9/69 (support under it)
     "riding": dict(threshold=0.26, clearance_limit=0.10, interior_limit=1.0,
                    contact=("all", 0.10, 0.75, 90.0),             # 96.8 %, 67.5 %
-                   collision=[(0.01, 0.0)], through=False),       # 11/48: above the seat
-}
+                   collision=[(0.01, 0.0)], through=False,        # 11/48: above the seat;
+                   straddle={"astride": ((0.12, 0.32), (-0.03, 0.03), (-0.30, 0.02)),
+                             "legroom": [((-0.10, 0.20), (0.16, 0.40), (-0.14, 0.02)),
+                                         ((-0.10, 0.20), (-0.40, -0.16), (-0.14, 0.02))]}),
+}                                                                 # with straddle 40/48
 # (*) estimates dominated by a few background pairs of large weight (one judged pair stands
 #     for up to 43,000): an earlier sample of the same rooms chose, for sitting, S_aff 0.22
 #     with the all-groups contact test (estimated 97 % / 47 %); on this sample that test
