@@ -208,3 +208,29 @@ def test_feet_on_a_step_high_above_the_floor_are_no_seat_and_a_foot_rest_is(pose
         if not p.valid:
             assert v.reasons == ["feet on a surface 1.2 m above the ground"]
             assert lenient.judge(scene, np.asarray(p.pose)).valid
+
+
+def test_a_rider_on_a_tall_partition_is_out_of_reach_and_one_on_a_low_wall_rides(poses):
+    """The judge traps' walls: astride a 0.9 m wall's top is pretend riding (valid); astride
+    a 2.4 m partition's top the rider passes every other test (the partition goes on between
+    the legs, the legs have room, the seat touches) and is out of reach from the floor (the
+    published kitchens' top riders straddled their 2.4-2.7 m walls)."""
+    from interaction_tensor.evaluation.judge import Judge, JudgeScene, JudgeSettings
+    from interaction_tensor.examples import interactions, validation
+
+    walls = [p for p in poses if p.affordance == "riding" and "wall" in p.case
+             or "partition" in p.case]
+    assert sum(p.valid for p in walls) >= 6 and sum(not p.valid for p in walls) >= 6
+    ex = interactions.build("riding-human", _objects())
+    scene = JudgeScene(validation.build_scene("judge_traps").geometry)
+    judge = Judge.for_example(ex)
+    lenient = Judge.for_example(ex, JudgeSettings(seat_above_ground=100.0))
+    for p in walls:
+        v = judge.judge(scene, np.asarray(p.pose))
+        assert v.valid == p.valid, (p.case, v.reasons)
+        assert v.astride and v.legroom and v.contact > 0.1
+        if p.valid:
+            assert 0.85 <= v.seat_height <= 1.0
+        else:
+            assert v.reasons == ["seat 2.4 m above the ground: out of reach to ride"]
+            assert lenient.judge(scene, np.asarray(p.pose)).valid

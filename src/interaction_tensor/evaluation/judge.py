@@ -73,6 +73,11 @@ Tests, by affordance (``tests`` in :data:`TESTS`):
    seat or a bed fails; a sofa cushion lower than that beside the arm does not). Pretend riding
    does not need the example's motorbike: the rider's legs are not tested for penetration
    (they go where the support lets them, as a child's on a sofa arm), its arms as in test 1.
+9. **Within reach from the ground** (riding). The seat (the posed point the example rests
+   on) is at most ``seat_above_ground`` = 1.3 m above the ground (the lowest scene point
+   within 1.5 m): a person climbs astride a bench, a sofa arm, a motorbike or a vaulting
+   horse (1.05-1.35 m), not the top of a 2.4 m wall or partition with the feet dangling a
+   metre and more above the floor.
 
 A pose is valid when every test of its affordance passes. :class:`Verdict` keeps each measured
 value, so that a table can show why a pose failed.
@@ -94,7 +99,7 @@ TESTS = {
     "filling": ("penetration", "contact", "support", "overhead", "basin"),
     "hanging": ("penetration", "contact", "loop", "ground"),
     "sitting": ("penetration", "contact", "support", "feet"),
-    "riding": ("penetration", "contact", "astride", "legroom"),
+    "riding": ("penetration", "contact", "astride", "legroom", "mount"),
 }
 #: Affordances whose query is a container, tested as its convex hull.
 HULL = ("placing", "filling")
@@ -145,6 +150,7 @@ class JudgeSettings:
     legroom_lateral: tuple = (0.18, 0.35)
     legroom_along: tuple = (-0.10, 0.20)
     legroom_below: tuple = (0.14, 0.02)        # (below, above) the seat
+    seat_above_ground: float = 1.3
     seed: int = 0
 
 
@@ -168,6 +174,7 @@ class Verdict:
     below_ground: float | None = None
     astride: bool | None = None
     legroom: bool | None = None
+    seat_height: float | None = None
     reasons: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
@@ -178,6 +185,7 @@ class Verdict:
                 "overhead": self.overhead, "basin_sectors": self.basin, "loop": self.loop,
                 "feet_gap_m": r(self.feet_gap), "below_ground_m": r(self.below_ground),
                 "astride": self.astride, "legroom": self.legroom,
+                "seat_height_m": r(self.seat_height),
                 "reasons": list(self.reasons)}
 
 
@@ -403,6 +411,13 @@ class Judge:
             verdict.legroom = not any(_in_column(local_t, c).any() for c in self.legroom_columns)
             if not verdict.legroom:
                 reasons.append("no room for a leg on each side of the support")
+        if "mount" in self.tests:
+            seat = moved(self.support_point)
+            verdict.seat_height = float(seat[2]) - scene.ground_level(
+                seat, st.ground_radius + self.radius)
+            if verdict.seat_height > st.seat_above_ground:
+                reasons.append(f"seat {verdict.seat_height:.1f} m above the ground: out of "
+                               "reach to ride")
         verdict.reasons = reasons
         verdict.valid = not reasons
         return verdict

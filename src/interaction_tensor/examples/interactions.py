@@ -413,7 +413,7 @@ ACCEPTANCE: dict = {
                    straddle={"astride": ((0.12, 0.32), (-0.03, 0.03), (-0.30, 0.02)),
                              "legroom": [((-0.10, 0.20), (0.16, 0.40), (-0.14, 0.02)),
                                          ((-0.10, 0.20), (-0.40, -0.16), (-0.14, 0.02))]}),
-}                                                                 # with straddle 40/48
+}                                                                 # with straddle 40/54
 # (*) estimates dominated by a few background pairs of large weight (one judged pair stands
 #     for up to 43,000): an earlier sample of the same rooms chose, for sitting, S_aff 0.22
 #     with the all-groups contact test (estimated 97 % / 47 %); on this sample that test

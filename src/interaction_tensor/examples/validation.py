@@ -213,7 +213,9 @@ def _judge_traps():
     has the calves along the front, :func:`flush_counter_edges`); two stepped units, a low
     one (a seat with a foot rest 20 cm up) and a tall one (its top 1.65 m up, the step 1.2 m:
     :func:`stepped_unit_seats`); and the floor slab's open +x and +y edges
-    (:func:`floor_edge_seats`)."""
+    (:func:`floor_edge_seats`). For the riding judge: a low wall (0.9 m) and a tall
+    partition (2.4 m), each 1.2 m long, whose tops a rider can straddle
+    (:func:`wall_top_rides`)."""
     k = F._Kit()
     k.box((-0.6, -0.3, 0.71), (0.6, 0.3, 0.74))                      # table top
     for x in (-0.5, 0.5):
@@ -235,7 +237,12 @@ def _judge_traps():
         k.box((-0.4, -0.5, 0.0), (0.4, 0.5, step))
         k.box((0.0, -0.5, step), (0.4, 0.5, step + 0.45))
         units.append(k.piece(name, xy, 0))
-    return _shell((4.2, 3.4)), [table, counter] + units
+    walls = []
+    for name, y0, height, thick in WALL_TOPS:
+        k = F._Kit()
+        k.box((-thick / 2, -0.6, 0.0), (thick / 2, 0.6, height))
+        walls.append(k.piece(name, (WALL_X, y0), 0))
+    return _shell(TRAPS_SIZE), [table, counter] + units + walls
 
 
 def _floorless_traps():
@@ -262,6 +269,22 @@ def star_base_hooks(scene: "ValidationScene", radius: float = 0.2) -> list:
         t = _ray_hits(low, np.array([[xy[0], xy[1], 0.2]]), np.array([0.0, 0.0, -1.0]))
         out.append((np.r_[xy, 0.2 - t.min()], d, f"office chair star-base leg {i + 1}"))
     return out
+
+
+#: The judge traps' floor slab (m; open on its +x and +y edges).
+TRAPS_SIZE = (5.6, 3.4)
+#: The judge traps' walls a rider can straddle: (name, centre y, height, thickness), all
+#: 1.2 m long along y at x = :data:`WALL_X`.
+WALL_TOPS = (("low wall", 0.9, 0.9, 0.12), ("tall partition", 2.5, 2.4, 0.10))
+WALL_X = 4.9
+
+
+def wall_top_rides() -> list:
+    """Where a rider straddles the top of :func:`_judge_traps`'s walls, facing along them:
+    [(point on the top's centre line (3,), facing angle (radians), height m, note)]."""
+    return [((WALL_X, y0 + dy, height), angle, height, f"{name}, y {dy:+.1f}")
+            for name, y0, height, _ in WALL_TOPS for dy in (-0.2, 0.0, 0.2)
+            for angle in (math.pi / 2, -math.pi / 2)]
 
 
 #: Judge traps (:func:`_judge_traps`): (support point under the bar, note).
@@ -297,8 +320,9 @@ def floor_edge_seats() -> list:
     """Where a person can be posed sitting on the open edges of :func:`_judge_traps`'s floor
     slab (no wall there), facing out, the legs hanging below the floor: [(point on the
     edge (3,), facing angle (radians), note)]."""
-    out = [((4.2, y, 0.0), 0.0, f"floor slab's +x edge, y {y:.1f}") for y in (0.6, 1.8)]
-    out += [((x, 3.4, 0.0), math.pi / 2, f"floor slab's +y edge, x {x:.1f}")
+    sx, sy = TRAPS_SIZE
+    out = [((sx, y, 0.0), 0.0, f"floor slab's +x edge, y {y:.1f}") for y in (0.6, 1.8)]
+    out += [((x, sy, 0.0), math.pi / 2, f"floor slab's +y edge, x {x:.1f}")
             for x in (0.4, 2.5)]
     return out
 
