@@ -33,6 +33,12 @@ one, ties to the option with the astride box, then to the wider legroom boxes (t
 space tested, as the collision tests' ties go to testing more of the query), and only when
 it rejects more than the tests before it.
 
+Then, on top of the kept straddle option, the mount test (``clearance.above_ground``: the
+posed reference point, a rider's seat, at most ``h`` above the scene's ground) at each
+height of ``MOUNT_HEIGHTS``: kept is the height that rejects the most invalid poses among
+those that keep every valid one, ties to the larger height (the more lenient, as for the
+feet), and only when it rejects more than the tests before it.
+
     python scripts/choose_collision.py --objects ../shared/data/objects \\
         --shared ../shared/data -o docs/results/collision
 """
@@ -47,8 +53,8 @@ from pathlib import Path
 import numpy as np
 
 from interaction_tensor import collision
-from interaction_tensor.clearance import (below_ground, feet_gaps_poses, standing_groups,
-                                         straddle_passes_poses)
+from interaction_tensor.clearance import (above_ground, below_ground, feet_gaps_poses,
+                                         standing_groups, straddle_passes_poses)
 from interaction_tensor.scene import prepare_scene
 from interaction_tensor.evaluation import labelled
 from interaction_tensor.evaluation.judge import TESTS
@@ -79,6 +85,7 @@ def straddle_option(astride: bool, lateral) -> dict:
     return {"astride": ASTRIDE_BOX if astride else None, "legroom": legroom}
 
 
+MOUNT_HEIGHTS = (1.0, 1.2, 1.3, 1.5, 2.0)
 STRADDLE_OPTIONS = [(a, lat) for a in (True, False) for lat in (None,) + STRADDLE_LATERAL
                     if a or lat is not None]
 
@@ -118,13 +125,14 @@ def options(rows: list) -> list:
 
 def passes(rows: list, tests, through: bool):
     """(valid, passes the option, below ground m, {reach: stands}, {straddle option:
-    passes}) per pose of one affordance's rows."""
+    passes}, above ground m) per pose of one affordance's rows."""
     poses = sorted({r["pose"] for r in rows})
     index = {p: k for k, p in enumerate(poses)}
     valid = np.zeros(len(poses), bool)
     ok = np.ones(len(poses), bool)
     below = np.zeros(len(poses))
     gap = np.zeros(len(poses))
+    high = np.zeros(len(poses))
     straddle = {o: np.ones(len(poses), bool) for o in STRADDLE_OPTIONS}
     for r in rows:
         k = index[r["pose"]]
@@ -132,12 +140,13 @@ def passes(rows: list, tests, through: bool):
             if r[f"straddle {a} {lat}"] is False:
                 straddle[(a, lat)][k] = False
         valid[k], below[k], gap[k] = r["valid"], r["below_ground_m"], float(r["feet_gap_m"])
+        high[k] = r["above_ground_m"]
         if through and not r["through"]:
             ok[k] = False
         for above, depth in tests:
             if r["above"] == _label(above) and float(r["separation_m"]) > depth:
                 ok[k] = False
-    return valid, ok, below, {f: gap <= f for f in FEET_REACHES}, straddle
+    return valid, ok, below, {f: gap <= f for f in FEET_REACHES}, straddle, high
 
 
 def main(argv=None) -> int:
@@ -182,6 +191,7 @@ def main(argv=None) -> int:
         crossed = through is not None and colliders[p.scene].collides(through, pose)
         at = (pose[:3, :3] @ tensor.reference_point + pose[:3, 3])[None]
         below = float(below_ground(at, tensor, scenes[p.scene])[0])
+        high = float(above_ground(at, tensor, scenes[p.scene])[0])
         gap = float(feet_gaps_poses(pose[None], tensor, scenes[p.scene])[0])
         for above, body in bodies.items():
             sep = colliders[p.scene].separation(body, pose, limit=max(DEPTHS))
@@ -189,6 +199,7 @@ def main(argv=None) -> int:
                          "case": p.case, "valid": p.valid, "pose": n, "above": _label(above),
                          "separation_m": sep if np.isfinite(sep) else "inf",
                          "through": crossed, "below_ground_m": round(below, 4),
+                         "above_ground_m": round(high, 4),
                          "feet_gap_m": round(gap, 4) if np.isfinite(gap) else str(gap),
                          **{k: straddles.get(k, "") for k in
                             (f"straddle {a} {lat}" for a, lat in STRADDLE_OPTIONS)}})
@@ -239,7 +250,10 @@ def main(argv=None) -> int:
                   "standing contacts):", "",
                   "| affordance | feet reach m | valid kept | invalid rejected | chosen |",
                   "|---|---:|---:|---:|:---:|"]
-    straddle_choice = {}
+    straddle_choice, mount_choice = {}, {}
+    mount_table = ["", "The mount test added to the kept straddle option:", "",
+                   "| affordance | seat above the ground m | valid kept | invalid rejected | "
+                   "chosen |", "|---|---:|---:|---:|:---:|"]
     straddle_table = ["", "The straddle test added to the kept option and ground test (the "
                       "affordances whose judge asks for a support between the legs; astride "
                       f"box {ASTRIDE_BOX}, legroom boxes {LEGROOM_ALONG} along and "
@@ -249,7 +263,7 @@ def main(argv=None) -> int:
     for aff, o in chosen.items():
         if o is None:
             continue
-        valid, ok, below, feet, straddle = passes([r for r in rows if r["affordance"] == aff], o[0],
+        valid, ok, below, feet, straddle, high = passes([r for r in rows if r["affordance"] == aff], o[0],
                                         o[1])
         base = int((~ok[~valid]).sum())
         ground[aff] = None
@@ -274,6 +288,16 @@ def main(argv=None) -> int:
                                               0 if t[0][1] is None else -t[0][1][0]))[0] \
                 if good else None
             straddle_choice[aff] = best_s
+            oks = okg & straddle[best_s] if best_s else okg
+            base_m = int((~oks[~valid]).sum())
+            tried_m = [(h, int((oks & (high <= h))[valid].sum()),
+                        int((~(oks & (high <= h)))[~valid].sum())) for h in MOUNT_HEIGHTS]
+            good = [t for t in tried_m if t[1] == int(valid.sum()) and t[2] > base_m]
+            mount_choice[aff] = max(good, key=lambda t: (t[2], t[0]))[0] if good else None
+            for h, kept, rejected in tried_m:
+                mount_table.append(f"| {aff} | {h:g} | {kept}/{int(valid.sum())} | {rejected}/"
+                                   f"{int((~valid).sum())} (without it {base_m}) | "
+                                   f"{'**yes**' if h == mount_choice[aff] else ''} |")
             for o, kept, rejected in tried:
                 straddle_table.append(
                     f"| {aff} | {'yes' if o[0] else ''} | "
@@ -301,8 +325,10 @@ def main(argv=None) -> int:
                                      f", through={o[1]}, below_ground={ground.get(aff)}"
                                      f", feet_reach={feet_choice.get(aff)}"
                                      + (f", straddle={straddle_option(*straddle_choice[aff])}"
-                                        if straddle_choice.get(aff) else "")))
-    lines += table + feet_table + straddle_table
+                                        if straddle_choice.get(aff) else "")
+                                     + (f", mount_height={mount_choice[aff]}"
+                                        if mount_choice.get(aff) else "")))
+    lines += table + feet_table + straddle_table + mount_table
     (out / "choice.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0

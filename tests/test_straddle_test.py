@@ -1,10 +1,11 @@
-"""Detection's straddle test (``DetectSettings.straddle``, the descriptor's ``straddle``).
+"""Detection's straddle and mount tests (riding: ``DetectSettings.straddle`` and ``.mount``,
+the descriptor's ``straddle`` and ``mount_height``).
 
 A rider needs the support to go on between the legs ahead of the seat and room for a leg on
-each side. These tests check the column search against a brute-force reference, the rider it
-must keep (astride a narrow bench, facing along it) and the ones it must reject (across the
-bench, on a bed's wide top), the riding acceptance it ships with, and the setting's file
-round trip.
+each side, and a seat within reach from the ground. These tests check the column search
+against a brute-force reference, the rider it must keep (astride a narrow bench, facing
+along it) and the ones it must reject (across the bench, on a bed's wide top, on a tall
+partition's top), the riding acceptance it ships with, and the settings' file round trip.
 """
 
 from __future__ import annotations
@@ -15,8 +16,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import interaction_tensor as it
-from interaction_tensor.clearance import (FAILS_STRADDLE, PLACED, box_lattice,
-                                          check_placements, straddle_passes,
+from interaction_tensor.clearance import (FAILS_MOUNT, FAILS_STRADDLE, PLACED, above_ground,
+                                          box_lattice, check_placements, straddle_passes,
                                           straddle_passes_poses)
 from interaction_tensor.errors import InputError
 from interaction_tensor.examples import interactions
@@ -26,7 +27,8 @@ from interaction_tensor.scene import ColumnIndex
 from conftest import descriptor_with_header
 
 #: only the straddle test decides
-STRADDLE_ONLY = dict(clearance=False, contact=False, interior=False, ground=False, feet=False)
+STRADDLE_ONLY = dict(clearance=False, contact=False, interior=False, ground=False, feet=False,
+                     mount=False)
 
 
 @pytest.fixture(scope="module")
@@ -37,9 +39,10 @@ def riding():
 @pytest.fixture(scope="module")
 def room():
     """A bench 10 cm wide along x (top 0.5 m, x from -1 to 1), a bed 1.6 m wide (top 0.5 m)
-    at x = 3, and a floor."""
+    at x = 3, a partition 10 cm wide (top 2.4 m) along x at y = 1, and a floor."""
     parts = [box_part("bench", (0.0, 0.0, 0.25), (2.0, 0.10, 0.5)),
              box_part("bed", (3.0, 0.0, 0.25), (1.0, 1.6, 0.5)),
+             box_part("partition", (0.0, 1.0, 1.2), (2.0, 0.10, 2.4)),
              box_part("floor", (1.5, 0.0, -0.01), (6.0, 3.0, 0.02))]
     return it.prepare_scene(parts_mesh(parts), 0.01, seed=0)
 
@@ -108,7 +111,7 @@ def test_detection_on_the_bench_and_bed_keeps_riders_along_the_bench_only(riding
     tensor = interactions.build_descriptor("riding-human")
     tensor.set_acceptance(1e-3)
     pts = room.points
-    top = pts[:, 2] > 0.49
+    top = (pts[:, 2] > 0.49) & (pts[:, 2] < 0.6)                # the bench's and the bed's
     bench = np.flatnonzero(top & (np.abs(pts[:, 0]) < 0.6))
     bed = np.flatnonzero(top & (np.abs(pts[:, 0] - 3.0) < 0.3) & (np.abs(pts[:, 1]) < 0.5))
     tops = np.r_[bench[::4], bed[::40]]
@@ -150,3 +153,41 @@ def test_the_straddle_setting_survives_a_file_and_a_bad_one_is_refused(riding, t
             it.InteractionTensor.load(tmp_path / name)
     old = descriptor_with_header(tmp_path / "r.npz", tmp_path / "old.npz", drop="straddle")
     assert it.InteractionTensor.load(old).straddle is None
+
+
+def test_a_rider_on_a_tall_partition_is_out_of_reach_and_one_on_the_bench_is_not(riding, room):
+    """Astride the partition's top, facing along it, the rider passes the straddle test (the
+    partition between the legs, room on each side) and fails the mount test: the seat is
+    2.4 m up (the published kitchens' top riders on their walls)."""
+    assert riding.mount_height == 1.5
+    points = np.array([[0.0, 0.0, 0.5], [0.0, 1.0, 2.4]])
+    orient = np.array([0, 0])
+    assert straddle_passes(points, orient, riding, room, 8).tolist() == [True, True]
+    np.testing.assert_allclose(above_ground(points, riding, room), [0.52, 2.42], atol=0.011)
+    only = dict(STRADDLE_ONLY, straddle=True, mount=True)
+    assert check_placements(points, orient, riding, it.DetectSettings(**only),
+                            room)[1].tolist() == [PLACED, FAILS_MOUNT]
+    off = dict(only, mount=False)
+    assert (check_placements(points, orient, riding, it.DetectSettings(**off),
+                             room)[1] == PLACED).all()
+
+
+def test_the_mount_setting_survives_a_file_and_a_bad_one_is_refused(riding, tmp_path):
+    tensor = interactions.build_descriptor("riding-human")
+    assert tensor.acceptance()["mount_height"] == 1.5
+    tensor.set_acceptance(tensor.threshold(), mount_height=1.2)
+    assert it.InteractionTensor.load(tensor.save(tmp_path / "m.npz")).mount_height == 1.2
+    tensor.set_acceptance(tensor.threshold(), mount_height="off")
+    assert tensor.mount_height is None
+    for wrong in (-0.1, 11.0, "high", True):
+        with pytest.raises(ValueError, match="mount_height"):
+            tensor.set_acceptance(tensor.threshold(), mount_height=wrong)
+    tensor.set_acceptance(tensor.threshold(), mount_height=1.2)
+    tensor.save(tmp_path / "m.npz")
+    for name, value in (("a.npz", "tall"), ("b.npz", -1.0), ("c.npz", 50.0)):
+        descriptor_with_header(tmp_path / "m.npz", tmp_path / name, mount_height=value)
+        with pytest.raises(InputError, match="mount_height"):
+            it.InteractionTensor.load(tmp_path / name)
+    old = descriptor_with_header(tmp_path / "m.npz", tmp_path / "old.npz", drop="mount_height")
+    assert it.InteractionTensor.load(old).mount_height is None
+    assert interactions.build_descriptor("sitting-human").mount_height is None

@@ -63,6 +63,9 @@ FAILS_STRADDLE = 7
 #: Spacing (m) of the lattice that stands for a straddle box: the columns of the scene's
 #: column index (2 cm) that hold one of its points are the box's footprint.
 STRADDLE_LATTICE = 0.02
+#: A placement whose reference point (a rider's seat) is more than the descriptor's
+#: ``mount_height`` above the scene's ground (:func:`above_ground`; riding).
+FAILS_MOUNT = 8
 #: How far (m) above a sole a surface may be and still be what the foot stands on (the
 #: judge's contact tolerance).
 FEET_TOLERANCE = 0.02
@@ -237,6 +240,14 @@ def below_ground(points, tensor, scene) -> np.ndarray:
     return ground - (points[:, 2] + lowest)
 
 
+def above_ground(points, tensor, scene) -> np.ndarray:
+    """(P,) how far (m) test points (the posed reference point: a rider's seat) are above
+    the scene's ground (:meth:`~.scene.Scene.ground_level`, within :data:`GROUND_RADIUS`
+    plus the object's size)."""
+    points = np.asarray(points, float).reshape(-1, 3)
+    return points[:, 2] - scene.ground_level(points, GROUND_RADIUS + tensor.radius)
+
+
 def standing_groups(tensor, tolerance: float = 0.02) -> list:
     """The example's standing contacts: each contact group whose points all lay within
     ``tolerance`` (m) of the example's ground (a seated person's feet; none without a
@@ -359,7 +370,9 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
     contact), ground (when the descriptor has ``below_ground``: the query object no deeper
     than that below the scene's ground), feet (when the descriptor has ``feet_reach``: its
     standing contacts find something to stand on, :func:`feet_gaps`), straddle (when the
-    descriptor has ``straddle``: :func:`straddle_passes`).
+    descriptor has ``straddle``: :func:`straddle_passes`) and mount (when it has
+    ``mount_height``: the reference point no higher than that above the ground,
+    :func:`above_ground`).
 
     Parameters
     ----------
@@ -407,6 +420,10 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
     if settings.straddle and tensor.straddle is not None and len(todo):
         ok = straddle_passes(points[todo], orient[todo], tensor, scene, n_o)
         outcome[todo[~ok]] = FAILS_STRADDLE
+    todo = np.flatnonzero(outcome == PLACED)
+    if settings.mount and tensor.mount_height is not None and len(todo):
+        high = above_ground(points[todo], tensor, scene) > tensor.mount_height
+        outcome[todo[high]] = FAILS_MOUNT
     return viol, outcome
 
 

@@ -162,6 +162,9 @@ class InteractionTensor:
         a sample in the ``astride`` box (something going on between the legs ahead of the
         seat) and none in a ``legroom`` box (room for a leg on each side)
         (:func:`.clearance.straddle_passes`)
+    mount_height : detection rejects a placement whose reference point (a rider's seat) is
+        more than this (m) above the scene's ground (the lowest scene sample within 1.5 m):
+        no one climbs astride the top of a 2.4 m wall; None: no such test
     scene_points : (S, 3) scene-object samples used for the Voronoi step (subsampled)
     scene_spacing : spacing (m) of the scene-object samples; detection samples at it
     vectors : ``surface`` or ``points``, how provenance (and test) vectors are measured
@@ -206,6 +209,7 @@ class InteractionTensor:
     below_ground: float | None = None
     feet_reach: float | None = None
     straddle: dict | None = None
+    mount_height: float | None = None
     thresholds: dict = field(default_factory=dict)
     self_scores: dict = field(default_factory=dict)
     meta: dict = field(default_factory=dict)
@@ -227,7 +231,8 @@ class InteractionTensor:
                        through: bool | None = None,
                        below_ground: float | str | None = None,
                        feet_reach: float | str | None = None,
-                       straddle: dict | str | None = None) -> None:
+                       straddle: dict | str | None = None,
+                       mount_height: float | str | None = None) -> None:
         """Accept placements scoring at least ``threshold`` (both keypoint sets, paper
         criterion), violating at most ``clearance_limit`` of the clearance points and
         ``interior_limit`` of the interior points, and keeping their contact (``contact`` =
@@ -239,7 +244,8 @@ class InteractionTensor:
         them; ``through`` turns the through-the-hook test on or off (:attr:`through`);
         ``below_ground`` (m) sets the ground test (:attr:`below_ground`) and ``feet_reach``
         (m) the feet test (:attr:`feet_reach`), ``straddle`` (a dict of boxes) the straddle
-        test (:attr:`straddle`), ``"off"`` removes any of them. Arguments left None keep their
+        test (:attr:`straddle`) and ``mount_height`` (m) the mount test
+        (:attr:`mount_height`), ``"off"`` removes any of them. Arguments left None keep their
         value."""
         if not 0 < threshold <= 1:
             raise ValueError("threshold must be in (0, 1]")
@@ -253,10 +259,12 @@ class InteractionTensor:
                     not 0 <= fraction <= 1 or not 0 < angle <= 90:
                 raise ValueError("contact must be (off|main|all, distance > 0, fraction in "
                                  "[0, 1][, angle in (0, 90]])")
-        for name, value in (("below_ground", below_ground), ("feet_reach", feet_reach)):
+        for name, value, top in (("below_ground", below_ground, 1.0),
+                                 ("feet_reach", feet_reach, 1.0),
+                                 ("mount_height", mount_height, 10.0)):
             if value is not None and not (isinstance(value, str) and value == "off"):
-                if isinstance(value, (str, bool)) or not 0 <= float(value) <= 1:
-                    raise ValueError(f"{name} must be a depth in [0, 1] m or 'off'")
+                if isinstance(value, (str, bool)) or not 0 <= float(value) <= top:
+                    raise ValueError(f"{name} must be a height in [0, {top:g}] m or 'off'")
         boxes = None
         if straddle is not None and not (isinstance(straddle, str) and straddle == "off"):
             boxes = straddle_boxes(straddle)
@@ -284,6 +292,9 @@ class InteractionTensor:
             self.feet_reach = None if isinstance(feet_reach, str) else float(feet_reach)
         if straddle is not None:
             self.straddle = boxes
+        if mount_height is not None:
+            self.mount_height = (None if isinstance(mount_height, str)
+                                 else float(mount_height))
         self.__dict__.pop("_collision_bodies", None)
         self.__dict__.pop("_through_body", None)
 
@@ -327,7 +338,8 @@ class InteractionTensor:
                 "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
                 "collision_tests": [list(t) for t in self.collision_tests],
                 "through": self.through, "below_ground": self.below_ground,
-                "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle)}
+                "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle),
+                "mount_height": self.mount_height}
 
     def pose(self, position, angle: float) -> np.ndarray:
         """4x4 pose taking the training-frame query object to ``position`` at ``angle``."""
@@ -549,6 +561,7 @@ class InteractionTensor:
             "collision_tests": [list(t) for t in self.collision_tests], "through": self.through,
             "ground": self.ground, "below_ground": self.below_ground,
             "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle),
+            "mount_height": self.mount_height,
             "thresholds": self.thresholds, "self_scores": self.self_scores, "meta": self.meta,
         }
         arrays = {
@@ -629,6 +642,7 @@ class InteractionTensor:
             through_section=arrays["through_section"],
             ground=header["ground"], below_ground=header["below_ground"],
             feet_reach=header["feet_reach"], straddle=header["straddle"],
+            mount_height=header["mount_height"],
             thresholds=header["thresholds"],
             self_scores=header["self_scores"], meta=header["meta"])
         return tensor
@@ -667,6 +681,7 @@ class InteractionTensor:
             "through": ({"on": self.through, "section_vertices": int(len(self.through_section))}),
             "ground": self.ground, "below_ground": self.below_ground,
             "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle),
+            "mount_height": self.mount_height,
             "thresholds": self.thresholds, "self_scores": self.self_scores,
             "meta": self.meta,
         }
@@ -800,6 +815,9 @@ def validate_descriptor(path, header: dict, arrays: dict):
     feet = header.get("feet_reach")
     if feet is not None:
         feet = number("feet_reach", 0.0, 1.0)
+    mount = header.get("mount_height")
+    if mount is not None:
+        mount = number("mount_height", 0.0, 10.0)
     straddle = header.get("straddle")
     if straddle is not None:
         try:
@@ -850,6 +868,7 @@ def validate_descriptor(path, header: dict, arrays: dict):
               "ground": None if ground is None else float(ground),
               "below_ground": None if below is None else float(below),
               "feet_reach": None if feet is None else float(feet), "straddle": straddle,
+              "mount_height": mount,
               "meta": meta}
     return header, out
 

@@ -218,6 +218,9 @@ class DetectSettings:
     #: between the legs ahead of the seat and leaves room for a leg on each side (a bench
     #: crossed sideways, a wide seat or a bed fails; ours).
     straddle: bool = True
+    #: Mount test (when the descriptor has ``mount_height``: riding): the seat no higher
+    #: than that above the scene's ground (no one climbs astride a 2.4 m wall; ours).
+    mount: bool = True
     interior_tolerance: float = 0.01
     #: Collision test (when the scene is a triangle mesh, ``Scene.mesh``, and the descriptor
     #: has a collision depth): a placement that reaches the top k is moved into the scene

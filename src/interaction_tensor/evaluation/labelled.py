@@ -324,8 +324,8 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
             out.append(_entry(ex, "validation:judge_traps",
                               site_pose(ex, point, angle, (0.01 - calves) * d), False,
                               "on a floor's open edge, legs hanging below it", note))
-        # riders astride the top of a low wall (0.9 m: pretend riding) and of a tall
-        # partition (2.4 m: out of reach, the feet dangling 1.5 m above the floor; the
+        # riders astride the top of a low wall (0.9 m: pretend riding) and of partitions of
+        # 1.6 and 2.4 m (out of reach, the feet dangling 0.7-1.5 m above the floor; the
         # published kitchens' top riders straddled their 2.4-2.7 m walls)
         ex = examples["riding"]
         for point, angle, height, note in validation.wall_top_rides():
@@ -333,7 +333,7 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
             out.append(_entry(ex, "validation:judge_traps",
                               site_pose(ex, point, angle),
                               low, "astride a low wall's top" if low else
-                              "astride a 2.4 m partition's top, out of reach", note))
+                              f"astride a {height:g} m partition's top, out of reach", note))
         log(f"judge_traps: {len(out)} poses so far")
         # a hook round an office chair's star-base leg in a scan without its floor: the
         # hanger hangs through where the floor is (fooled the judge in office-desk6); and

@@ -412,8 +412,9 @@ ACCEPTANCE: dict = {
                    collision=[(0.01, 0.0)], through=False,        # 11/48: above the seat;
                    straddle={"astride": ((0.12, 0.32), (-0.03, 0.03), (-0.30, 0.02)),
                              "legroom": [((-0.10, 0.20), (0.16, 0.40), (-0.14, 0.02)),
-                                         ((-0.10, 0.20), (-0.40, -0.16), (-0.14, 0.02))]}),
-}                                                                 # with straddle 40/54
+                                         ((-0.10, 0.20), (-0.40, -0.16), (-0.14, 0.02))]},
+                   mount_height=1.5),                             # straddle 40/60, mount 52
+}
 # (*) estimates dominated by a few background pairs of large weight (one judged pair stands
 #     for up to 43,000): an earlier sample of the same rooms chose, for sitting, S_aff 0.22
 #     with the all-groups contact test (estimated 97 % / 47 %); on this sample that test

@@ -213,8 +213,8 @@ def _judge_traps():
     has the calves along the front, :func:`flush_counter_edges`); two stepped units, a low
     one (a seat with a foot rest 20 cm up) and a tall one (its top 1.65 m up, the step 1.2 m:
     :func:`stepped_unit_seats`); and the floor slab's open +x and +y edges
-    (:func:`floor_edge_seats`). For the riding judge: a low wall (0.9 m) and a tall
-    partition (2.4 m), each 1.2 m long, whose tops a rider can straddle
+    (:func:`floor_edge_seats`). For the riding judge: a low wall (0.9 m), a partition of
+    1.6 m and a tall one (2.4 m), each 1.2 m long, whose tops a rider can straddle
     (:func:`wall_top_rides`)."""
     k = F._Kit()
     k.box((-0.6, -0.3, 0.71), (0.6, 0.3, 0.74))                      # table top
@@ -238,10 +238,10 @@ def _judge_traps():
         k.box((0.0, -0.5, step), (0.4, 0.5, step + 0.45))
         units.append(k.piece(name, xy, 0))
     walls = []
-    for name, y0, height, thick in WALL_TOPS:
+    for name, x0, y0, height, thick in WALL_TOPS:
         k = F._Kit()
         k.box((-thick / 2, -0.6, 0.0), (thick / 2, 0.6, height))
-        walls.append(k.piece(name, (WALL_X, y0), 0))
+        walls.append(k.piece(name, (x0, y0), 0))
     return _shell(TRAPS_SIZE), [table, counter] + units + walls
 
 
@@ -273,17 +273,17 @@ def star_base_hooks(scene: "ValidationScene", radius: float = 0.2) -> list:
 
 #: The judge traps' floor slab (m; open on its +x and +y edges).
 TRAPS_SIZE = (5.6, 3.4)
-#: The judge traps' walls a rider can straddle: (name, centre y, height, thickness), all
-#: 1.2 m long along y at x = :data:`WALL_X`.
-WALL_TOPS = (("low wall", 0.9, 0.9, 0.12), ("tall partition", 2.5, 2.4, 0.10))
-WALL_X = 4.9
+#: The judge traps' walls a rider can straddle: (name, centre x, centre y, height,
+#: thickness), all 1.2 m long along y.
+WALL_TOPS = (("low wall", 4.9, 0.9, 0.9, 0.12), ("tall partition", 4.9, 2.5, 2.4, 0.10),
+             ("mid partition", 4.2, 1.7, 1.6, 0.10))
 
 
 def wall_top_rides() -> list:
     """Where a rider straddles the top of :func:`_judge_traps`'s walls, facing along them:
     [(point on the top's centre line (3,), facing angle (radians), height m, note)]."""
-    return [((WALL_X, y0 + dy, height), angle, height, f"{name}, y {dy:+.1f}")
-            for name, y0, height, _ in WALL_TOPS for dy in (-0.2, 0.0, 0.2)
+    return [((x0, y0 + dy, height), angle, height, f"{name}, y {dy:+.1f}")
+            for name, x0, y0, height, _ in WALL_TOPS for dy in (-0.2, 0.0, 0.2)
             for angle in (math.pi / 2, -math.pi / 2)]
 
 
