@@ -31,13 +31,12 @@ from interaction_tensor.io import load_geometry
 TAPS = {"kitchen1": (7.12, 10.15), "kitchen4": (0.52, 2.78), "kitchen5": (2.16, 0.97)}
 
 
-def drop_below(scene, xy, top: float, radius: float = 0.03) -> float:
-    """Height (m) from ``top`` down to the highest upward-facing sample below it within
-    ``radius`` of ``xy``; inf where there is none."""
-    p, n = scene.points, scene.normals
-    near = (np.linalg.norm(p[:, :2] - xy, axis=1) <= radius) & (p[:, 2] < top - 0.02) \
-        & (n[:, 2] > 0.7)
-    return float(top - p[near, 2].max()) if near.any() else np.inf
+def drop_below(scene, xy, top: float) -> float:
+    """Height (m) from ``top`` down to the highest sample one can stand on at least 2 cm
+    below it in the 2 cm columns around ``xy``
+    (:meth:`~interaction_tensor.scene.Scene.highest_under`); inf where there is none."""
+    below = scene.highest_under(np.asarray(xy, float).reshape(1, 1, 2), np.array([top - 0.02]))
+    return float(top - below[0])
 
 
 def main(argv=None) -> int:

@@ -177,3 +177,38 @@ def test_not_descriptors_never_load_and_never_mention_pickle(real, tmp_path):
     with pytest.raises(it.InputError, match="never loaded") as info:
         it.InteractionTensor.load(tmp_path / "object.npz")
     assert "allow_pickle" not in str(info.value)
+
+
+@pytest.mark.parametrize("example, field, default, good, wrong, wrong_in_file", [
+    ("sitting-human", "feet_reach", 0.25, 0.3, (-0.01, 2.0, "on", True), ("far", -1.0, 3.0)),
+    ("riding-human", "mount_height", 1.5, 1.2, (-0.1, 11.0, "high", True),
+     ("tall", -1.0, 50.0)),
+])
+def test_a_height_setting_survives_a_file_and_a_bad_one_is_refused(
+        tmp_path, example, field, default, good, wrong, wrong_in_file):
+    """The feet and mount tests' heights (m): set, saved, loaded, switched off; out of range
+    or of the wrong type refused when set and when read from a file; absent from an older
+    file, the test is off."""
+    from interaction_tensor.errors import InputError
+    from interaction_tensor.examples import interactions
+
+    from conftest import descriptor_with_header
+
+    tensor = interactions.build_descriptor(example)
+    assert tensor.acceptance()[field] == default
+    tensor.set_acceptance(tensor.threshold(), **{field: good})
+    saved = tensor.save(tmp_path / "d.npz")
+    assert getattr(it.InteractionTensor.load(saved), field) == good
+    tensor.set_acceptance(tensor.threshold(), **{field: "off"})
+    assert getattr(tensor, field) is None
+    for value in wrong:
+        with pytest.raises(ValueError, match=field):
+            tensor.set_acceptance(tensor.threshold(), **{field: value})
+    for i, value in enumerate(wrong_in_file):
+        descriptor_with_header(saved, tmp_path / f"bad{i}.npz", **{field: value})
+        with pytest.raises(InputError, match=field):
+            it.InteractionTensor.load(tmp_path / f"bad{i}.npz")
+    old = descriptor_with_header(saved, tmp_path / "old.npz", drop=field)
+    assert getattr(it.InteractionTensor.load(old), field) is None
+    other = "riding-human" if example == "sitting-human" else "sitting-human"
+    assert getattr(interactions.build_descriptor(other), field) is None

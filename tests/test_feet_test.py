@@ -17,11 +17,9 @@ from hypothesis import strategies as st
 import interaction_tensor as it
 from interaction_tensor.clearance import (FAILS_FEET, PLACED, check_placements, feet_gaps,
                                           feet_gaps_poses, standing_groups)
-from interaction_tensor.errors import InputError
 from interaction_tensor.examples import interactions
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 
-from conftest import descriptor_with_header
 
 #: only the feet test decides
 FEET_ONLY = dict(clearance=False, contact=False, interior=False, ground=False)
@@ -142,24 +140,6 @@ def test_detection_on_the_counter_room_predicts_no_one_on_the_counter(sitting):
     det = it.detect(scene, tensor, it.DetectSettings(**loose, feet=False),
                     test_indices=on_top[::4])
     assert det.pairs.accepted.sum() == det.stats["pairs_accepted_by_score"]
-
-
-def test_the_feet_setting_survives_a_file_and_a_bad_one_is_refused(sitting, tmp_path):
-    tensor = interactions.build_descriptor("sitting-human")
-    assert tensor.acceptance()["feet_reach"] == 0.25
-    tensor.set_acceptance(tensor.threshold(), feet_reach=0.3)
-    assert it.InteractionTensor.load(tensor.save(tmp_path / "f.npz")).feet_reach == 0.3
-    tensor.set_acceptance(tensor.threshold(), feet_reach="off")
-    assert tensor.feet_reach is None
-    for wrong in (-0.01, 2.0, "on", True):
-        with pytest.raises(ValueError, match="feet_reach"):
-            tensor.set_acceptance(tensor.threshold(), feet_reach=wrong)
-    for name, value in (("a.npz", "far"), ("b.npz", -1.0), ("c.npz", 3.0)):
-        descriptor_with_header(tmp_path / "f.npz", tmp_path / name, feet_reach=value)
-        with pytest.raises(InputError, match="feet_reach"):
-            it.InteractionTensor.load(tmp_path / name)
-    old = descriptor_with_header(tmp_path / "f.npz", tmp_path / "old.npz", drop="feet_reach")
-    assert it.InteractionTensor.load(old).feet_reach is None
 
 
 def test_a_face_beside_the_shins_is_not_something_to_stand_on(sitting):

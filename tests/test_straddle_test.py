@@ -170,24 +170,3 @@ def test_a_rider_on_a_tall_partition_is_out_of_reach_and_one_on_the_bench_is_not
     off = dict(only, mount=False)
     assert (check_placements(points, orient, riding, it.DetectSettings(**off),
                              room)[1] == PLACED).all()
-
-
-def test_the_mount_setting_survives_a_file_and_a_bad_one_is_refused(riding, tmp_path):
-    tensor = interactions.build_descriptor("riding-human")
-    assert tensor.acceptance()["mount_height"] == 1.5
-    tensor.set_acceptance(tensor.threshold(), mount_height=1.2)
-    assert it.InteractionTensor.load(tensor.save(tmp_path / "m.npz")).mount_height == 1.2
-    tensor.set_acceptance(tensor.threshold(), mount_height="off")
-    assert tensor.mount_height is None
-    for wrong in (-0.1, 11.0, "high", True):
-        with pytest.raises(ValueError, match="mount_height"):
-            tensor.set_acceptance(tensor.threshold(), mount_height=wrong)
-    tensor.set_acceptance(tensor.threshold(), mount_height=1.2)
-    tensor.save(tmp_path / "m.npz")
-    for name, value in (("a.npz", "tall"), ("b.npz", -1.0), ("c.npz", 50.0)):
-        descriptor_with_header(tmp_path / "m.npz", tmp_path / name, mount_height=value)
-        with pytest.raises(InputError, match="mount_height"):
-            it.InteractionTensor.load(tmp_path / name)
-    old = descriptor_with_header(tmp_path / "m.npz", tmp_path / "old.npz", drop="mount_height")
-    assert it.InteractionTensor.load(old).mount_height is None
-    assert interactions.build_descriptor("sitting-human").mount_height is None
