@@ -8,7 +8,7 @@ import pytest
 import interaction_tensor as it
 from interaction_tensor.clearance import clearance_offsets, nearest_distance_function, violations
 from interaction_tensor.detect import full_scores, keypoint_table, rank_pairs
-from interaction_tensor.evaluation.tuning import choose, curve
+from interaction_tensor.evaluation.tuning import _columns, accepts, choose, curve
 from interaction_tensor.examples.procedural import box_part, parts_mesh, table
 from interaction_tensor.predictions import top_k
 from interaction_tensor.scoring import score_pairs_exact
@@ -145,6 +145,16 @@ def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
     assert ch["contact"][0] != "off" and ch["interior_limit"] < 1
     assert ch["precision"] == pytest.approx(1.0) and ch["recall"] == pytest.approx(1.0)
     assert ch["without_new_tests"]["precision"] == pytest.approx(8 / 19)
+
+    # pairs failing a fixed test (ground, feet, straddle, mount: column ``fixed``) are never
+    # accepted, whatever the threshold and the tuned tests (rows without the column, a
+    # tuning recorded before it, are judged on the other columns alone: above)
+    rows3 = [dict(row(0.9, True), fixed=True)] * 8 + [dict(row(0.95, False), fixed=False)] * 6
+    ok = accepts(_columns(rows3), 0.5, 0.05, 1.0, ("off", 0.02, 0.1, 90.0))
+    assert ok.tolist() == [True] * 8 + [False] * 6
+    ch3 = choose(rows3, runs)[1]["placing"]
+    assert ch3["precision"] == pytest.approx(1.0) and ch3["recall"] == pytest.approx(1.0)
+    assert ch3["contact"][0] == "off" and ch3["interior_limit"] == 1.0
 
     # the tuning's record is written as one transaction and replaces an earlier one
     from interaction_tensor.evaluation.tuning import TuneResult, write

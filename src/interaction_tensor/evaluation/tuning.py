@@ -57,6 +57,11 @@ CONTACT_OPTIONS = (("off", CONTACT_DISTANCES[0], CONTACT_FRACTIONS[0], 90.0),) +
     (mode, d, f, a) for mode in ("main", "all") for d, a in CONTACT_TESTS
     for f in CONTACT_FRACTIONS)
 #: The most lenient placement tests tried: the stratification's second key.
+#: The per-pair placement tests not tuned here (each chosen on the labelled set:
+#: ``scripts/choose_collision.py``), taken from the affordance's acceptance
+#: (:data:`..examples.interactions.ACCEPTANCE`) and applied before those tuned, as
+#: detection does: the ground, feet, straddle and mount tests.
+FIXED_TESTS = ("below_ground", "feet_reach", "straddle", "mount_height")
 LENIENT = {"limit": max(LIMITS),
            "interior_limit": max(v for v in INTERIOR_LIMITS if v < 1),
            "contact": ("main", max(CONTACT_DISTANCES), min(CONTACT_FRACTIONS), 90.0)}
@@ -68,7 +73,7 @@ def _contact_column(mode: str, distance: float, angle: float) -> str:
 
 #: Columns of a judged pair (``tuning_pairs.csv``).
 COLUMNS = (["scene", "example", "affordance", "pair", "near_site", "score", "violations",
-            "clearance_points", "interior_violations", "interior_points"]
+            "clearance_points", "interior_violations", "interior_points", "fixed"]
            + [_contact_column(m, d, a) for m in ("main", "all") for d, a in CONTACT_TESTS]
            + ["weight", "top", "valid", "reasons"])
 
@@ -88,6 +93,9 @@ class TuneSettings:
     per_band_rest: int = 3
     top_k: int = 5
     seed: int = 0
+    #: apply each affordance's :data:`FIXED_TESTS` first (False: as before 2026-11-26, when
+    #: the acceptance was tuned without them)
+    fixed_tests: bool = True
 
 
 @dataclass
@@ -128,8 +136,10 @@ class _Run:
 
 
 def _features(det, tensor, scene, grid) -> dict:
-    """The pair columns of :data:`COLUMNS` for every pair of a detection."""
-    from ..clearance import contact_fractions, interior_violations
+    """The pair columns of :data:`COLUMNS` for every pair of a detection; ``fixed``: the
+    pair passes the descriptor's :data:`FIXED_TESTS` (those it has)."""
+    from ..clearance import PLACED, check_placements, contact_fractions, interior_violations
+    from ..settings import DetectSettings
 
     pts = scene.points[det.pair_point]
     orient = np.asarray(det.pair_orientation, np.int64)
@@ -139,6 +149,9 @@ def _features(det, tensor, scene, grid) -> dict:
              "interior_violations": interior_violations(
                  pts, orient, tensor, det.settings.interior_tolerance, n_o, scene, grid),
              "interior_points": np.full(len(pts), len(tensor.interior_points))}
+    only_fixed = DetectSettings(clearance=False, contact=False, interior=False,
+                                n_orientations=n_o)
+    feats["fixed"] = check_placements(pts, orient, tensor, only_fixed, scene, grid)[1] == PLACED
     frac = contact_fractions(pts, orient, tensor, CONTACT_TESTS, n_o, scene, grid)
     has = frac.shape[2] > 0
     for j, (d, a) in enumerate(CONTACT_TESTS):
@@ -152,10 +165,13 @@ def accepts(features: dict, threshold: float, limit: float, interior_limit: floa
     """(P,) bool: the pairs an acceptance takes, from their columns (``features``: column ->
     array, or a list of row dicts' columns): score at least ``threshold``, at most ``limit``
     of the clearance points and ``interior_limit`` of the interior points violated (1: no
-    interior test), and the contact test ``(mode, distance, fraction, angle)`` passed."""
+    interior test), the contact test ``(mode, distance, fraction, angle)`` passed, and the
+    fixed tests (column ``fixed``, where the pairs have it) passed."""
     f = features
     ok = ((np.asarray(f["score"]) >= threshold - 1e-12)
           & (np.asarray(f["violations"]) <= limit * np.asarray(f["clearance_points"])))
+    if "fixed" in f:
+        ok &= np.asarray(f["fixed"]).astype(bool)
     if interior_limit < 1:
         ok &= (np.asarray(f["interior_violations"])
                <= interior_limit * np.asarray(f["interior_points"]))
@@ -188,9 +204,13 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
     models = {}
     for n in names:
         ex = interactions.build(n, st.objects_dir, st.seed)
-        models[n] = (ex, interactions.build_descriptor(n, seed=st.seed, spacing=st.spacing,
-                                                        example=ex, tuned=False),
-                     Judge.for_example(ex))
+        tensor = interactions.build_descriptor(n, seed=st.seed, spacing=st.spacing,
+                                               example=ex, tuned=False)
+        fixed = {k: v for k, v in interactions.ACCEPTANCE.get(ex.spec.affordance, {}).items()
+                 if k in FIXED_TESTS}
+        if st.fixed_tests and fixed:
+            tensor.set_acceptance(tensor.threshold(), **fixed)
+        models[n] = (ex, tensor, Judge.for_example(ex))
     rng = np.random.default_rng(st.seed)
     keep = []
     for sname in scenes:
@@ -216,7 +236,8 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
             t1 = time.perf_counter()
             det = detect(scene, tensor, it.DetectSettings(
                 threshold=1e-9, clearance_max_violations=1.0, contact=False, interior=False,
-                top_k=0, seed=st.seed, neighbour_cache=True), test_indices=test)
+                ground=False, feet=False, straddle=False, mount=False, top_k=0, seed=st.seed,
+                neighbour_cache=True), test_indices=test)
             feats = _features(det, tensor, scene, grid)
             is_near = near[det.pair_point]
             weight = np.where(is_near, 1.0, len(others) / len(back))
