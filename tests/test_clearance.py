@@ -149,7 +149,10 @@ def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
     # pairs failing a fixed test (ground, feet, straddle, mount: column ``fixed``) are never
     # accepted, whatever the threshold and the tuned tests (rows without the column, a
     # tuning recorded before it, are judged on the other columns alone: above)
-    rows3 = [dict(row(0.9, True), fixed=True)] * 8 + [dict(row(0.95, False), fixed=False)] * 6
+    # and so are the judged pairs failing the exact collision or through test (``free``)
+    rows3 = ([dict(row(0.9, True), fixed=True, free=True)] * 8
+             + [dict(row(0.95, False), fixed=False, free=True)] * 4
+             + [dict(row(0.95, False), fixed=True, free=False)] * 2)
     ok = accepts(_columns(rows3), 0.5, 0.05, 1.0, ("off", 0.02, 0.1, 90.0))
     assert ok.tolist() == [True] * 8 + [False] * 6
     ch3 = choose(rows3, runs)[1]["placing"]

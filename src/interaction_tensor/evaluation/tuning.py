@@ -57,11 +57,14 @@ CONTACT_OPTIONS = (("off", CONTACT_DISTANCES[0], CONTACT_FRACTIONS[0], 90.0),) +
     (mode, d, f, a) for mode in ("main", "all") for d, a in CONTACT_TESTS
     for f in CONTACT_FRACTIONS)
 #: The most lenient placement tests tried: the stratification's second key.
-#: The per-pair placement tests not tuned here (each chosen on the labelled set:
+#: The placement tests not tuned here (each chosen on the labelled set:
 #: ``scripts/choose_collision.py``), taken from the affordance's acceptance
-#: (:data:`..examples.interactions.ACCEPTANCE`) and applied before those tuned, as
-#: detection does: the ground, feet, straddle and mount tests.
-FIXED_TESTS = ("below_ground", "feet_reach", "straddle", "mount_height")
+#: (:data:`..examples.interactions.ACCEPTANCE`) and applied as detection does: the ground,
+#: feet, straddle and mount tests to every pair (column ``fixed``), the exact collision and
+#: through-the-hook tests to the pairs judged and ranked (column ``free``,
+#: :class:`..detect.CollisionCheck`).
+FIXED_TESTS = ("below_ground", "feet_reach", "straddle", "mount_height", "collision",
+               "through")
 LENIENT = {"limit": max(LIMITS),
            "interior_limit": max(v for v in INTERIOR_LIMITS if v < 1),
            "contact": ("main", max(CONTACT_DISTANCES), min(CONTACT_FRACTIONS), 90.0)}
@@ -73,7 +76,7 @@ def _contact_column(mode: str, distance: float, angle: float) -> str:
 
 #: Columns of a judged pair (``tuning_pairs.csv``).
 COLUMNS = (["scene", "example", "affordance", "pair", "near_site", "score", "violations",
-            "clearance_points", "interior_violations", "interior_points", "fixed"]
+            "clearance_points", "interior_violations", "interior_points", "fixed", "free"]
            + [_contact_column(m, d, a) for m in ("main", "all") for d, a in CONTACT_TESTS]
            + ["weight", "top", "valid", "reasons"])
 
@@ -133,6 +136,7 @@ class _Run:
     position: np.ndarray        # (P, 3) test points
     orient: np.ndarray          # (P,) orientation indices
     features: dict              # column name -> (P,) values (:data:`COLUMNS`)
+    check: object = None        # the detection's CollisionCheck (column ``free``, lazily)
 
 
 def _features(det, tensor, scene, grid) -> dict:
@@ -166,12 +170,13 @@ def accepts(features: dict, threshold: float, limit: float, interior_limit: floa
     array, or a list of row dicts' columns): score at least ``threshold``, at most ``limit``
     of the clearance points and ``interior_limit`` of the interior points violated (1: no
     interior test), the contact test ``(mode, distance, fraction, angle)`` passed, and the
-    fixed tests (column ``fixed``, where the pairs have it) passed."""
+    fixed tests (columns ``fixed`` and ``free``, where the pairs have them) passed."""
     f = features
     ok = ((np.asarray(f["score"]) >= threshold - 1e-12)
           & (np.asarray(f["violations"]) <= limit * np.asarray(f["clearance_points"])))
-    if "fixed" in f:
-        ok &= np.asarray(f["fixed"]).astype(bool)
+    for column in ("fixed", "free"):
+        if column in f:
+            ok &= np.asarray(f[column]).astype(bool)
     if interior_limit < 1:
         ok &= (np.asarray(f["interior_violations"])
                <= interior_limit * np.asarray(f["interior_points"]))
@@ -189,7 +194,7 @@ def _columns(rows: list) -> dict:
 def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
     """Run the tuning (module docstring) and choose the acceptance of each affordance."""
     import interaction_tensor as it
-    from ..detect import detect
+    from ..detect import collision_check, detect
     from ..examples import interactions, validation
     from ..kernels import available as kernels_available
     from .judge import Judge, JudgeScene
@@ -237,7 +242,7 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
             det = detect(scene, tensor, it.DetectSettings(
                 threshold=1e-9, clearance_max_violations=1.0, contact=False, interior=False,
                 ground=False, feet=False, straddle=False, mount=False, top_k=0, seed=st.seed,
-                neighbour_cache=True), test_indices=test)
+                neighbour_cache=True, collision_max_tests=100_000), test_indices=test)
             feats = _features(det, tensor, scene, grid)
             is_near = near[det.pair_point]
             weight = np.where(is_near, 1.0, len(others) / len(back))
@@ -247,6 +252,7 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
             pick, frac = _sample(keys, np.arange(len(keys)),
                                  lambda k: st.per_band if (k // 10) % 10 else st.per_band_rest,
                                  rng)
+            check = collision_check(det)
             for i, w in zip(pick, frac):
                 pose = tensor.pose(scene.points[det.pair_point[i]],
                                    2 * np.pi * det.pair_orientation[i] / det.settings.n_orientations)
@@ -254,11 +260,11 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
                 res.rows.append({
                     "scene": sname, "example": n, "affordance": aff, "pair": int(i),
                     "near_site": bool(is_near[i]),
-                    **{c: _value(feats[c][i]) for c in feats},
+                    **{c: _value(feats[c][i]) for c in feats}, "free": check.free(int(i)),
                     "weight": round(float(w * weight[i]), 4), "top": False,
                     "valid": bool(v.valid), "reasons": "; ".join(v.reasons)})
             keep.append(_Run(sname, n, aff, tensor, scene.points[det.pair_point],
-                             np.asarray(det.pair_orientation, np.int64), feats))
+                             np.asarray(det.pair_orientation, np.int64), feats, check))
             res.runs.append({"scene": sname, "example": n, "affordance": aff,
                              "sites": int(kinds.get(SITE_OF[aff], 0)),
                              "pairs": int(len(keys)), "near_site_pairs": int(is_near.sum()),
@@ -299,7 +305,9 @@ def _judge_tops(res: TuneResult, runs: list, models: dict, st: TuneSettings, log
             ok = np.flatnonzero(accepts(r.features, ch["threshold"], ch["clearance_limit"],
                                         ch["interior_limit"], tuple(ch["contact"])))
             radius = suppression_radius(r.tensor, DetectSettings())
-            tops = ok[top_k(r.position[ok], r.features["score"][ok], st.top_k, radius)]
+            accept = None if r.check is None else (lambda j: r.check.free(int(ok[j])))
+            tops = ok[top_k(r.position[ok], r.features["score"][ok], st.top_k, radius,
+                            accept=accept)]
             _, _, judge = models[r.example]
             for i in tops:
                 v = judge.judge(jscene, r.tensor.pose(r.position[i], 2 * np.pi * r.orient[i] / 8))
@@ -307,6 +315,7 @@ def _judge_tops(res: TuneResult, runs: list, models: dict, st: TuneSettings, log
                     "scene": sname, "example": r.example, "affordance": r.affordance,
                     "pair": int(i), "near_site": None,
                     **{c: _value(r.features[c][i]) for c in r.features},
+                    "free": None if r.check is None else r.check.free(int(i)),
                     "weight": 0.0, "top": True, "valid": bool(v.valid),
                     "reasons": "; ".join(v.reasons)})
             log(f"{sname:>15} {r.example:<16} top {len(tops)} judged")
