@@ -7,7 +7,7 @@ import pytest
 
 from interaction_tensor.examples import interactions
 from interaction_tensor.examples.procedural import box_part, parts_mesh, table
-from interaction_tensor.evaluation.judge import Judge, JudgeScene
+from interaction_tensor.evaluation.judge import Judge, JudgeScene, JudgeSettings
 
 
 def _shift(x, y, z):
@@ -142,3 +142,31 @@ def test_separation_measures_how_deep_a_box_is_in_a_slab():
     assert slab.separation(cube, _shift(0, 0, -0.5)) == 0.0        # under the slab
     rod = collision.Body(*collision.box((-0.003, -0.003, -0.5), (0.003, 0.003, 0.5)))
     assert slab.separation(rod, np.eye(4)) == np.inf                  # a wire through it
+
+
+def test_a_board_edge_over_a_mug_in_a_niche_is_not_a_tap():
+    """A mug in a niche (a board under it, panels on three sides) with a board's front edge
+    2.5 cm behind its axis and 13 cm over its rim passes the basin test and has scene surface
+    within 3 cm of its axis, covering less than half the disk: the judge without its
+    one-side test took it for a tap (as office-desk2's keyboard niche). The edge spans about
+    170 degrees around the axis; a spout reaching the same place from the back spans a few
+    tens: that one passes."""
+    ex = interactions.build("filling-mug")
+    judge = Judge.for_example(ex)
+    ox, oy, bottom = ex.support_point
+    niche = [box_part("floor board", (ox, oy, bottom - 0.01), (0.4, 0.5, 0.02)),
+             box_part("left panel", (ox - 0.21, oy, bottom + 0.11), (0.02, 0.5, 0.24)),
+             box_part("right panel", (ox + 0.21, oy, bottom + 0.11), (0.02, 0.5, 0.24)),
+             box_part("back panel", (ox, oy + 0.26, bottom + 0.11), (0.44, 0.02, 0.24))]
+    rim = float(ex.query.vertices[:, 2].max())
+    board = box_part("top board", (ox, oy + 0.025 + 0.1125, rim + 0.14), (0.4, 0.225, 0.02))
+    scene = JudgeScene(parts_mesh(niche + [board]))
+    v = judge.judge(scene, np.eye(4))
+    assert v.basin >= 5 and v.support_margin > 0.01            # only the tap test decides
+    assert not v.valid and v.overhead is False
+    before = Judge.for_example(ex, JudgeSettings(overhead_one_side=False,
+                                                 overhead_max_angle=360.0))
+    assert before.judge(scene, np.eye(4)).valid                # the trap it fell into
+    spout = box_part("spout", (ox, oy + 0.025 + 0.1125, rim + 0.14), (0.03, 0.225, 0.02))
+    v = judge.judge(JudgeScene(parts_mesh(niche + [spout])), np.eye(4))
+    assert v.overhead is True and v.valid, v.reasons

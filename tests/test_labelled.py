@@ -47,20 +47,27 @@ def test_the_set_has_20_valid_and_20_invalid_poses_per_affordance(poses):
         assert any(needle in c for c in cases), needle
 
 
-def test_the_bar_traps_have_a_tap_like_bar_above_and_no_basin(poses):
-    """The mugs under a bar pass every filling test but the basin's (what fooled the judge
-    before it had one); the valid mugs are in basins."""
-    from interaction_tensor.evaluation.judge import Judge, JudgeScene
+def test_the_bar_traps_fail_the_basin_test_and_the_one_side_tap_test(poses):
+    """The mugs under a bar pass every filling test but the basin's when the tap test only
+    asks for surface over the opening (what fooled the judge before it had a basin test);
+    the bar runs across the opening, so the tap test's one-side rule rejects them as well:
+    each test alone would."""
+    from interaction_tensor.evaluation.judge import Judge, JudgeScene, JudgeSettings
     from interaction_tensor.examples import interactions, validation
 
     traps = [p for p in poses if p.scene == "validation:judge_traps" and p.affordance == "filling"]
     assert len(traps) == 12 and not any(p.valid for p in traps)
-    judge = Judge.for_example(interactions.build("filling-mug", _objects()))
+    example = interactions.build("filling-mug", _objects())
+    judge = Judge.for_example(example)
+    lenient = Judge.for_example(example, JudgeSettings(overhead_one_side=False,
+                                                       overhead_max_angle=360.0))
     scene = JudgeScene(validation.build_scene("judge_traps").geometry)
     for p in traps:
-        v = judge.judge(scene, np.asarray(p.pose))
+        v = lenient.judge(scene, np.asarray(p.pose))
         assert v.overhead and not v.valid
         assert len(v.reasons) == 1 and v.reasons[0].startswith("not in a basin"), v.reasons
+        v = judge.judge(scene, np.asarray(p.pose))
+        assert v.overhead is False and v.basin < judge.settings.basin_sectors
     assert "judge_traps" not in validation.scene_names()        # never tuned on
 
 

@@ -39,7 +39,13 @@ Tests, by affordance (``tests`` in :data:`TESTS`):
    inside it by ``support_margin`` = 1 cm. An object half off an edge fails.
 4. **A tap above, in a basin** (filling). Scene points above the opening (within 3 cm of its
    axis, 2 to 30 cm above the rim) that are not a ceiling or a shelf (the scene in that
-   height range covers at most half of the 15 cm disk around the opening); and walls around
+   height range covers at most half of the 15 cm disk around the opening) and that reach
+   the opening from one side, as a spout ends over it: beyond the 3 cm, no two opposite
+   eighths of that disk both hold scene surface (``overhead_one_side``), and what is there
+   spans at most ``overhead_max_angle`` = 150 degrees around the axis (in 10 degree bins;
+   the labelled taps span 0-100). A bar, a board's front edge or a monitor's bezel runs
+   across or along the opening (220-280 degrees): office-desk2's keyboard niche and
+   office-desk4's monitor fooled the judge without it; and walls around
    the object, as a sink's, a washbasin's or a dispenser niche's: scene surface between the
    object's side and 30 cm from its axis, from 2 cm above its support up to its rim, in at
    least 5 of 8 sectors around it (a mug on the floor under a table's stretcher, or on a
@@ -134,6 +140,8 @@ class JudgeSettings:
     overhead_range: tuple = (0.02, 0.30)
     overhead_disk: float = 0.15
     overhead_max_cover: float = 0.5
+    overhead_one_side: bool = True
+    overhead_max_angle: float = 150.0
     basin_radius: float = 0.30
     basin_height: tuple = (0.02, 0.0)          # above the support, above the rim
     basin_sectors: int = 5                     # of 8
@@ -456,7 +464,19 @@ class Judge:
         cell = 0.02
         cells = np.unique(np.floor(disk[:, :2] / cell).astype(np.int64), axis=0)
         cover = len(cells) * cell ** 2 / (np.pi * st.overhead_disk ** 2)
-        return bool(cover <= st.overhead_max_cover)
+        if cover > st.overhead_max_cover:
+            return False
+        if not st.overhead_one_side:
+            return True
+        d = disk[:, :2] - opening[:2]
+        r = np.hypot(d[:, 0], d[:, 1])
+        side = d[r > st.overhead_radius]
+        angle = np.arctan2(side[:, 1], side[:, 0]) + np.pi              # [0, 2 pi]
+        eighths = np.zeros(8, bool)
+        eighths[np.clip(np.floor(angle / (np.pi / 4)), 0, 7).astype(np.int64)] = True
+        bins = np.unique(np.clip(np.floor(angle / np.radians(10)), 0, 35))
+        return bool(not (eighths[:4] & eighths[4:]).any()
+                    and 10.0 * len(bins) <= st.overhead_max_angle)
 
     def _basin(self, scene: JudgeScene, com, support_z: float, rim_z: float) -> int:
         """Of 8 sectors around the object's axis, how many hold scene surface between its

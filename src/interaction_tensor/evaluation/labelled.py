@@ -384,6 +384,15 @@ HAND_POSED: list = [
      "on a cabinet top, not astride", "living-room2 side cabinet"),
     ("riding", "scenes/living-room2.ply", (1.60, 0.54, 0.586), math.pi, False,
      "on a cabinet top, not astride", "living-room2 side cabinet"),
+    # offices have no tap: a mug in a desk's keyboard niche under the desk top's front edge,
+    # and one beside a monitor's stand under its bezel (both judged valid before the tap
+    # test asked the surface above to reach the opening from one side)
+    ("filling", "scenes/office-desk2.ply", (1.556, 1.117, 0.767), math.pi / 2, False,
+     "in a niche under a board's edge, no tap", "office-desk2 keyboard niche"),
+    ("filling", "scenes/office-desk2.ply", (1.564, 1.114, 0.767), math.pi, False,
+     "in a niche under a board's edge, no tap", "office-desk2 keyboard niche"),
+    ("filling", "scenes/office-desk4.ply", (1.316, 0.234, 0.738), math.pi / 2, False,
+     "beside a monitor's stand under its bezel, no tap", "office-desk4 desk"),
 ]
 
 
