@@ -233,3 +233,30 @@ def test_atomic_dir_keeps_the_earlier_result_on_failure(tmp_path):
         with atomic_dir(other, "run.json"):
             pass
     assert (other / "notes.txt").read_text() == "keep me"
+
+
+def test_a_top_pair_the_collision_tests_never_reached_is_not_counted_accepted(tmp_path,
+                                                                              monkeypatch):
+    """With the collision tests' budget spent (here none allowed), the top pairs pass the
+    score and the placement tests but are never tested against the scene's triangles:
+    the run accepts nothing, and none of its top poses is counted accepted (they were,
+    while ``accepted`` was the score's and placement tests' decision alone)."""
+    import dataclasses
+
+    import interaction_tensor as it
+    from interaction_tensor.cli import main
+
+    no_budget = dataclasses.replace(it.DetectSettings(), collision_max_tests=0)
+    monkeypatch.setattr(it, "DetectSettings",
+                        lambda **kw: dataclasses.replace(no_budget, **kw))
+    out = tmp_path / "eval"
+    assert main(["evaluate", "--scenes", str(shared_file("scenes/office-desk1.ply")), "-o",
+                 str(out), "--examples", "placing-bowl", "--test-points", "800",
+                 "--methods", "iT-weighted", "--no-judge-check", "--seed", "0",
+                 "--quiet"]) == 0
+    with open(out / "runs.csv") as fh:
+        runs = list(csv.DictReader(fh))
+    assert [r["any_accepted"] for r in runs] == ["False"] and int(runs[0]["accepted"]) > 0
+    with open(out / "judgements.csv") as fh:
+        top = [j for j in csv.DictReader(fh) if j["group"] == "top"]
+    assert len(top) == 5 and not any(j["accepted"] == "True" for j in top)

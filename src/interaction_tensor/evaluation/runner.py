@@ -231,7 +231,9 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                     # (accepted pairs that would enter the top are tested for collision)
                     top, top_s, top_ok = rank_pairs(det, st.n_judged, radius)
                     # accepted: by the score, and its placement and collision tests passed
-                    any_accepted = bool((det.pairs.accepted[top] & top_ok).any())
+                    # (a pair the collision tests never reached, their budget spent, is not)
+                    top_accepted = det.pairs.accepted[top] & top_ok
+                    any_accepted = bool(top_accepted.any())
                     bottom, bot_s, _ = rank_pairs(det, st.n_judged, radius, worst=True)
                     score = np.zeros(len(acc))
                     score[top], score[bottom] = top_s, bot_s
@@ -248,6 +250,7 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                                                         r.score, r.accepted, r.poses)
                     secs = time.perf_counter() - t1
                     top, bottom = _pick(scene, point, score, acc, st.n_judged, radius)
+                    top_accepted = acc[top]
                     any_accepted = bool(acc.any())
                 t2 = time.perf_counter()
                 shown = []
@@ -259,7 +262,8 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                         res.judgements.append({
                             "scene": f.stem, "example": n, "affordance": aff, "method": m,
                             "group": group, "rank": rank, "score": round(float(score[i]), 4),
-                            "accepted": bool(acc[i]), "valid": bool(v.valid),
+                            "accepted": bool(top_accepted[rank - 1] if group == "top"
+                                             else acc[i]), "valid": bool(v.valid),
                             "x": round(float(pose[0, 3]), 3), "y": round(float(pose[1, 3]), 3),
                             "z": round(float(pose[2, 3]), 3),
                             "penetration_m": (round(float(v.penetration), 4)
