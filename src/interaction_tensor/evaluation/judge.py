@@ -468,9 +468,7 @@ class Judge:
             return False
         if not st.overhead_one_side:
             return True
-        d = disk[:, :2] - opening[:2]
-        r = np.hypot(d[:, 0], d[:, 1])
-        side = d[r > st.overhead_radius]
+        side = p[(r > st.overhead_radius) & (r <= st.overhead_disk), :2] - opening[:2]
         angle = np.arctan2(side[:, 1], side[:, 0]) + np.pi              # [0, 2 pi]
         eighths = np.zeros(8, bool)
         eighths[np.clip(np.floor(angle / (np.pi / 4)), 0, 7).astype(np.int64)] = True

@@ -56,7 +56,6 @@ CONTACT_TESTS = tuple((d, a) for d in CONTACT_DISTANCES for a in CONTACT_ANGLES)
 CONTACT_OPTIONS = (("off", CONTACT_DISTANCES[0], CONTACT_FRACTIONS[0], 90.0),) + tuple(
     (mode, d, f, a) for mode in ("main", "all") for d, a in CONTACT_TESTS
     for f in CONTACT_FRACTIONS)
-#: The most lenient placement tests tried: the stratification's second key.
 #: The placement tests not tuned here (each chosen on the labelled set:
 #: ``scripts/choose_collision.py``), taken from the affordance's acceptance
 #: (:data:`..examples.interactions.ACCEPTANCE`) and applied as detection does: the ground,
@@ -65,6 +64,7 @@ CONTACT_OPTIONS = (("off", CONTACT_DISTANCES[0], CONTACT_FRACTIONS[0], 90.0),) +
 #: :class:`..detect.CollisionCheck`).
 FIXED_TESTS = ("below_ground", "feet_reach", "straddle", "mount_height", "collision",
                "through")
+#: The most lenient placement tests tried: the stratification's second key.
 LENIENT = {"limit": max(LIMITS),
            "interior_limit": max(v for v in INTERIOR_LIMITS if v < 1),
            "contact": ("main", max(CONTACT_DISTANCES), min(CONTACT_FRACTIONS), 90.0)}
