@@ -191,24 +191,6 @@ def test_a_hook_with_nothing_through_it_fails_and_one_on_its_rail_passes(hanging
     assert MeshCollider(*scene.mesh).collides(body, tensor.pose(scene.points[top[0]], 0.0))
 
 
-def test_detection_with_the_through_test_predicts_only_hooks_with_something_through(hanging):
-    ex, tensor = hanging
-    # a rail beside a cabinet: the hook rests on both tops, only the rail goes through it
-    parts = [box_part("cabinet", (0.6, 0, 0.8), (0.4, 0.4, 1.6))]
-    scene_geom = parts_mesh(parts)
-    rail = ex.scene_object
-    both = it.Geometry(np.vstack([scene_geom.vertices, rail.vertices]),
-                       np.vstack([scene_geom.faces, rail.faces + len(scene_geom.vertices)]))
-    scene = it.prepare_scene(both, 0.01, seed=0)
-    up = np.flatnonzero(scene.points[:, 2] > 1.55)
-    det = it.detect(scene, tensor, it.DetectSettings(**{**OPEN, "top_k": 5}),
-                    test_indices=up)
-    assert det.stats["through_test"] == "on" and det.stats["pairs_with_nothing_through"] > 0
-    collider, body = MeshCollider(*scene.mesh), tensor.through_body()
-    assert det.predictions and all(collider.collides(body, p.pose) for p in det.predictions)
-    assert all(abs(p.position[0]) < 0.05 for p in det.predictions)     # on the rail
-
-
 @given(st.integers(0, 2 ** 31 - 1), st.integers(1, 6), st.floats(0.0, 0.5))
 def test_suppression_with_a_test_picks_as_suppression_over_what_passes(seed, k, radius):
     rng = np.random.default_rng(seed)

@@ -62,3 +62,66 @@ def counts(points, orient, offsets, need, grid) -> np.ndarray:
                          np.asarray(grid.origin, np.float64), float(grid.cell),
                          np.asarray(grid.dims, np.int64), out)
     return out
+
+
+@njit(cache=True, parallel=True)
+def through_hits(centres, axes, ring, reach, slab, pts, starts, origin, cell, dims, out):
+    """out[i] = 1 when some sample lies within ``slab`` of the plane of placement i's posed
+    polygon (centre ``centres[i]``, rows u, v, n of ``axes[i]``) and inside it (``ring``:
+    (K, 2) counter-clockwise in (u, v)); only the cells within ``reach`` of the centre are
+    visited, and a placement stops at its first such sample."""
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    nx, ny, nz = dims[0], dims[1], dims[2]
+    k_n = ring.shape[0]
+    for i in prange(centres.shape[0]):
+        cx, cy, cz = centres[i, 0], centres[i, 1], centres[i, 2]
+        i0 = max(int(math.floor((cx - reach - ox) / cell)), 0)
+        i1 = min(int(math.floor((cx + reach - ox) / cell)), nx - 1)
+        j0 = max(int(math.floor((cy - reach - oy) / cell)), 0)
+        j1 = min(int(math.floor((cy + reach - oy) / cell)), ny - 1)
+        k0 = max(int(math.floor((cz - reach - oz) / cell)), 0)
+        k1 = min(int(math.floor((cz + reach - oz) / cell)), nz - 1)
+        found = False
+        for a in range(i0, i1 + 1):
+            if found:
+                break
+            for b in range(j0, j1 + 1):
+                if found:
+                    break
+                base = (a * ny + b) * nz
+                for c in range(k0, k1 + 1):
+                    if found:
+                        break
+                    for p in range(starts[base + c], starts[base + c + 1]):
+                        dx = pts[p, 0] - cx
+                        dy = pts[p, 1] - cy
+                        dz = pts[p, 2] - cz
+                        h = dx * axes[i, 2, 0] + dy * axes[i, 2, 1] + dz * axes[i, 2, 2]
+                        if abs(h) > slab:
+                            continue
+                        u = dx * axes[i, 0, 0] + dy * axes[i, 0, 1] + dz * axes[i, 0, 2]
+                        v = dx * axes[i, 1, 0] + dy * axes[i, 1, 1] + dz * axes[i, 1, 2]
+                        inside = True
+                        for e in range(k_n):
+                            f = e + 1 if e + 1 < k_n else 0
+                            ex = ring[f, 0] - ring[e, 0]
+                            ey = ring[f, 1] - ring[e, 1]
+                            if ex * (v - ring[e, 1]) - ey * (u - ring[e, 0]) < 0:
+                                inside = False
+                                break
+                        if inside:
+                            found = True
+                            break
+        out[i] = 1 if found else 0
+
+
+def through(centres, axes, ring, reach, slab, grid) -> np.ndarray:
+    """(P,) bool :func:`through_hits` on ``grid``."""
+    out = np.zeros(len(centres), np.int8)
+    if len(centres):
+        through_hits(np.ascontiguousarray(centres, np.float64),
+                     np.ascontiguousarray(axes, np.float64),
+                     np.ascontiguousarray(ring, np.float64), float(reach), float(slab),
+                     grid.points, grid.starts, np.asarray(grid.origin, np.float64),
+                     float(grid.cell), np.asarray(grid.dims, np.int64), out)
+    return out.astype(bool)

@@ -80,6 +80,18 @@ FEET_ABOVE_GROUND = 0.6
 #: How far (m) beyond the query object's size the ground is looked for around a placement
 #: (the judge's ``ground_radius``).
 GROUND_RADIUS = 1.5
+#: A placement whose posed through-section (the opening of a hook or a strap's loop, where
+#: the example's rail went through) no scene sample crosses (:func:`through_crossed`;
+#: hanging). Detection's exact test (:class:`..detect.CollisionCheck`) asks the scene's
+#: triangles the same of the pairs it ranks; this one asks every pair, so that the exact
+#: tests are spent on pairs with something through the hook.
+FAILS_THROUGH = 9
+#: How far (in scene spacings) a sample may lie from the plane of the posed through-section
+#: and count as crossing it (inside the polygon): a surface that crosses the section has
+#: samples within about a spacing of the crossing.
+THROUGH_SLAB = 1.0
+#: Placements per chunk of the reference through test (bounds its neighbour lists).
+THROUGH_CHUNK = 20_000
 #: Contact modes: no contact test, the main group (at the reference point), every group.
 CONTACT_MODES = ("off", "main", "all")
 
@@ -364,6 +376,83 @@ def straddle_passes_poses(poses, tensor, scene) -> np.ndarray:
     return straddle_passes_at(poses[:, :2, :2], at, tensor.straddle, scene)
 
 
+def through_polygon(section) -> tuple:
+    """A through-section (K, 3) (:attr:`~.descriptor.InteractionTensor.through_section`, a
+    flat convex polygon) in its own plane: (centre (3,), axes (3, 3) with rows u, v and the
+    normal n, (K, 2) vertices counter-clockwise in (u, v))."""
+    ring = np.asarray(section, float).reshape(-1, 3)
+    centre = ring.mean(axis=0)
+    vt = np.linalg.svd(ring - centre, full_matrices=False)[2]
+    axes = np.stack([vt[0], np.cross(vt[2], vt[0]), vt[2]])
+    flat = (ring - centre) @ axes[:2].T
+    x, y = flat[:, 0], flat[:, 1]
+    if np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y) < 0:    # clockwise: turn it
+        flat = flat[::-1]
+    return centre, axes, np.ascontiguousarray(flat)
+
+
+def _crossed_reference(centres, axes, ring, reach, slab, scene) -> np.ndarray:
+    """:func:`through_crossed_at`'s test with the scene's cKDTree (the reference of the
+    Numba kernel ``_numba_clearance.through_hits``): samples within ``reach`` of each posed
+    centre, in the slab and inside the polygon."""
+    hit = np.zeros(len(centres), bool)
+    edges = np.roll(ring, -1, axis=0) - ring
+    for s in range(0, len(centres), THROUGH_CHUNK):
+        c = centres[s:s + THROUGH_CHUNK]
+        groups = scene.tree.query_ball_point(c, reach)
+        sizes = np.fromiter((len(g) for g in groups), np.int64, len(groups))
+        if sizes.sum() == 0:
+            continue
+        idx = np.concatenate([np.asarray(g, np.int64) for g in groups])
+        owner = np.repeat(np.arange(len(c)), sizes)
+        local = np.einsum("pij,pj->pi", axes[s:s + THROUGH_CHUNK][owner],
+                          scene.points[idx] - c[owner])
+        rel = local[:, None, :2] - ring[None]
+        inside = ((edges[None, :, 0] * rel[..., 1] - edges[None, :, 1] * rel[..., 0]) >= 0
+                  ).all(axis=1) & (np.abs(local[:, 2]) <= slab)
+        hit[s + owner[inside]] = True
+    return hit
+
+
+def through_crossed_at(rot, shift, tensor, scene, grid=None) -> np.ndarray:
+    """(P,) whether the scene crosses the descriptor's through-section posed by ``rot``
+    (P, 3, 3) and ``shift`` (P, 3) (a training-frame point x goes to ``rot @ x + shift``):
+    a scene sample within :data:`THROUGH_SLAB` spacings of its plane, inside the polygon (a
+    rail, a peg or a panel's edge through the hook; a hook beside an edge or over a flat top
+    has none). On the Numba grid when one is given, else with the scene's cKDTree (the
+    reference; the same test). All True for a descriptor without a through-section."""
+    rot = np.asarray(rot, float).reshape(-1, 3, 3)
+    if len(tensor.through_section) < 3 or len(rot) == 0:
+        return np.ones(len(rot), bool)
+    centre, axes, ring = through_polygon(tensor.through_section)
+    centres = np.einsum("pij,j->pi", rot, centre) + np.asarray(shift, float).reshape(-1, 3)
+    posed_axes = np.einsum("pij,kj->pki", rot, axes)           # rows: posed u, v, n
+    slab = THROUGH_SLAB * float(scene.spacing)
+    reach = float(np.linalg.norm(ring, axis=1).max()) + slab
+    if grid is None:
+        return _crossed_reference(centres, posed_axes, ring, reach, slab, scene)
+    from . import _numba_clearance
+
+    return _numba_clearance.through(centres, posed_axes, ring, reach, slab, grid)
+
+
+def through_crossed(points, orient, tensor, scene, n_orientations: int,
+                    grid=None) -> np.ndarray:
+    """(P,) :func:`through_crossed_at` of placements (test points (P, 3), orientation
+    indices (P,))."""
+    points = np.asarray(points, float).reshape(-1, 3)
+    rot = rotation_z(2 * np.pi * np.arange(n_orientations) / n_orientations)[
+        np.asarray(orient, np.int64)]
+    shift = points - np.einsum("pij,j->pi", rot, tensor.reference_point)
+    return through_crossed_at(rot, shift, tensor, scene, grid)
+
+
+def through_crossed_poses(poses, tensor, scene, grid=None) -> np.ndarray:
+    """(P,) :func:`through_crossed_at` of placements given as 4x4 poses (P, 4, 4)."""
+    poses = np.asarray(poses, float).reshape(-1, 4, 4)
+    return through_crossed_at(poses[:, :3, :3], poses[:, :3, 3], tensor, scene, grid)
+
+
 def check_placements(points, orient, tensor, settings, scene, grid=None):
     """The placement tests of pairs the score accepted, in order: clearance (every pair),
     contact (those that kept their clearance), interior (those that also kept their
@@ -372,7 +461,8 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
     standing contacts find something to stand on, :func:`feet_gaps`), straddle (when the
     descriptor has ``straddle``: :func:`straddle_passes`) and mount (when it has
     ``mount_height``: the reference point no higher than that above the ground,
-    :func:`above_ground`).
+    :func:`above_ground`) and through (when the descriptor asks for its through-section to be
+    crossed: :func:`through_crossed`).
 
     Parameters
     ----------
@@ -424,6 +514,10 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
     if settings.mount and tensor.mount_height is not None and len(todo):
         high = above_ground(points[todo], tensor, scene) > tensor.mount_height
         outcome[todo[high]] = FAILS_MOUNT
+    todo = np.flatnonzero(outcome == PLACED)
+    if settings.through and tensor.through and len(tensor.through_section) >= 3 and len(todo):
+        ok = through_crossed(points[todo], orient[todo], tensor, scene, n_o, grid)
+        outcome[todo[~ok]] = FAILS_THROUGH
     return viol, outcome
 
 

@@ -75,6 +75,9 @@ def detection_options(p) -> None:
                         "for a leg on each side)")
     p.add_argument("--no-mount", action="store_true",
                    help="skip the mount test (a rider's seat within reach from the ground)")
+    p.add_argument("--no-through", action="store_true",
+                   help="skip the sampled through test of every pair (a hanger: scene samples "
+                        "across the hook's opening); the exact one of --no-collision stays")
     p.add_argument("--no-collision", action="store_true",
                    help="skip the collision test of the top predictions (a mesh scene's "
                         "triangles against the query's, python-fcl)")
@@ -185,6 +188,7 @@ def _detect_settings(args):
                           contact=not args.no_contact, interior=not args.no_interior,
                           ground=not args.no_ground, feet=not args.no_feet,
                           straddle=not args.no_straddle, mount=not args.no_mount,
+                          through=not args.no_through,
                           collision=not args.no_collision,
                           **{field: getattr(args, dest) for field, dest in _SETTING_OPTIONS.items()})
 
@@ -241,7 +245,8 @@ def _report(args, result, outdir) -> None:
                f"{st['pairs_failing_clearance']}, contact {st['pairs_failing_contact']}, "
                f"interior {st['pairs_failing_interior']}, ground "
                f"{st['pairs_failing_ground']}, feet {st['pairs_failing_feet']}, straddle "
-               f"{st['pairs_failing_straddle']}, mount {st['pairs_failing_mount']})")
+               f"{st['pairs_failing_straddle']}, mount {st['pairs_failing_mount']}, "
+               f"through {st['pairs_failing_through']})")
     if st["collision_test"] == "on":
         spent = " (the tests allowed are spent: fewer predictions)" \
             if st["collision_tests_exhausted"] else ""
@@ -275,7 +280,7 @@ def summary(result, outdir) -> dict:
             **{k: st[k] for k in ("pairs_failing_clearance", "pairs_failing_contact",
                                   "pairs_failing_interior", "pairs_failing_ground", "pairs_failing_feet",
                                   "pairs_failing_straddle", "pairs_failing_mount",
-                                  "collision_test", "collision_tests",
+                                  "pairs_failing_through", "collision_test", "collision_tests",
                                   "pairs_failing_collision", "pairs_with_nothing_through")},
             "candidates_per_second": st.get("candidates_per_second"),
             "pairs_per_second": st.get("pairs_per_second"), "seconds": st["seconds"],

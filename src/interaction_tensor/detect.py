@@ -526,7 +526,7 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
     timings["total"] = time.perf_counter() - t0
     decided = pairs.decided_at
     from .clearance import (FAILS_CLEARANCE, FAILS_CONTACT, FAILS_FEET, FAILS_GROUND,
-                            FAILS_INTERIOR, FAILS_MOUNT, FAILS_STRADDLE)
+                            FAILS_INTERIOR, FAILS_MOUNT, FAILS_STRADDLE, FAILS_THROUGH)
 
     def failing(code):
         return int((outcome == code).sum()) if outcome is not None else 0
@@ -545,6 +545,7 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
         "pairs_failing_feet": failing(FAILS_FEET),
         "pairs_failing_straddle": failing(FAILS_STRADDLE),
         "pairs_failing_mount": failing(FAILS_MOUNT),
+        "pairs_failing_through": failing(FAILS_THROUGH),
         **check.stats(),
         "keypoint_comparisons": int(pairs.comparisons),
         "keypoint_comparisons_to_decision": int(decided.sum()),

@@ -241,8 +241,9 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
             t1 = time.perf_counter()
             det = detect(scene, tensor, it.DetectSettings(
                 threshold=1e-9, clearance_max_violations=1.0, contact=False, interior=False,
-                ground=False, feet=False, straddle=False, mount=False, top_k=0, seed=st.seed,
-                neighbour_cache=True, collision_max_tests=100_000), test_indices=test)
+                ground=False, feet=False, straddle=False, mount=False, through=False, top_k=0,
+                seed=st.seed,
+                neighbour_cache=True), test_indices=test)   # detection's collision budget
             feats = _features(det, tensor, scene, grid)
             is_near = near[det.pair_point]
             weight = np.where(is_near, 1.0, len(others) / len(back))
