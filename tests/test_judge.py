@@ -131,6 +131,26 @@ def test_hanger_through_a_table_top_is_invalid():
         assert not v.valid and any("penetrates" in r for r in v.reasons), v
 
 
+def test_a_hanger_flat_against_a_wall_has_nothing_through_its_hook():
+    """The hanger's plane in a wall's face (where a detector's test point on the wall puts
+    it, turned parallel to the wall): the triangles of the wall meet the loop's disk, but
+    the wall lies in its plane, it does not go through. The judge passed it before it asked
+    for a surface across the loop; a rail through the hook crosses at 90 degrees."""
+    ex = interactions.build("hanging-hanger")
+    judge = Judge.for_example(ex)
+    # the rail runs along y, so the hanger lies in the x-z plane: a wall whose face is the
+    # plane y = 0, behind it
+    scene = JudgeScene(parts_mesh([box_part("wall", (0.0, -0.05, 1.0), (3.0, 0.1, 2.0))]))
+    flat = _shift(0.0, 0.0, 1.2 - ex.support_point[2])
+    v = judge.judge(scene, flat)
+    assert not v.valid and v.loop is False and v.reasons == ["nothing passes through the hook"]
+    # without the rule (any sample counts) the judge passed it
+    lenient = Judge.for_example(ex, JudgeSettings(loop_min_angle=0.0))
+    assert lenient.judge(scene, flat).valid
+    # and the rail through the hook still passes
+    assert judge.judge(JudgeScene(ex.scene_object), np.eye(4)).valid
+
+
 def test_separation_measures_how_deep_a_box_is_in_a_slab():
     from interaction_tensor import collision
 

@@ -65,11 +65,13 @@ def counts(points, orient, offsets, need, grid) -> np.ndarray:
 
 
 @njit(cache=True, parallel=True)
-def through_hits(centres, axes, ring, reach, slab, pts, starts, origin, cell, dims, out):
+def through_hits(centres, axes, ring, reach, slab, max_cos, pts, nrm, starts, origin, cell,
+                 dims, out):
     """out[i] = 1 when some sample lies within ``slab`` of the plane of placement i's posed
-    polygon (centre ``centres[i]``, rows u, v, n of ``axes[i]``) and inside it (``ring``:
-    (K, 2) counter-clockwise in (u, v)); only the cells within ``reach`` of the centre are
-    visited, and a placement stops at its first such sample."""
+    polygon (centre ``centres[i]``, rows u, v, n of ``axes[i]``), inside it (``ring``:
+    (K, 2) counter-clockwise in (u, v)), on a surface that crosses the plane (its normal
+    ``nrm`` at most ``max_cos`` along n, either way); only the cells within ``reach`` of the
+    centre are visited, and a placement stops at its first such sample."""
     ox, oy, oz = origin[0], origin[1], origin[2]
     nx, ny, nz = dims[0], dims[1], dims[2]
     k_n = ring.shape[0]
@@ -99,6 +101,9 @@ def through_hits(centres, axes, ring, reach, slab, pts, starts, origin, cell, di
                         h = dx * axes[i, 2, 0] + dy * axes[i, 2, 1] + dz * axes[i, 2, 2]
                         if abs(h) > slab:
                             continue
+                        if abs(nrm[p, 0] * axes[i, 2, 0] + nrm[p, 1] * axes[i, 2, 1]
+                               + nrm[p, 2] * axes[i, 2, 2]) > max_cos:
+                            continue
                         u = dx * axes[i, 0, 0] + dy * axes[i, 0, 1] + dz * axes[i, 0, 2]
                         v = dx * axes[i, 1, 0] + dy * axes[i, 1, 1] + dz * axes[i, 1, 2]
                         inside = True
@@ -115,13 +120,13 @@ def through_hits(centres, axes, ring, reach, slab, pts, starts, origin, cell, di
         out[i] = 1 if found else 0
 
 
-def through(centres, axes, ring, reach, slab, grid) -> np.ndarray:
+def through(centres, axes, ring, reach, slab, max_cos, grid) -> np.ndarray:
     """(P,) bool :func:`through_hits` on ``grid``."""
     out = np.zeros(len(centres), np.int8)
     if len(centres):
         through_hits(np.ascontiguousarray(centres, np.float64),
                      np.ascontiguousarray(axes, np.float64),
                      np.ascontiguousarray(ring, np.float64), float(reach), float(slab),
-                     grid.points, grid.starts, np.asarray(grid.origin, np.float64),
+                     float(max_cos), grid.points, grid.normals, grid.starts, np.asarray(grid.origin, np.float64),
                      float(grid.cell), np.asarray(grid.dims, np.int64), out)
     return out.astype(bool)

@@ -221,19 +221,6 @@ def through_section(query_vertices: np.ndarray, scene_points: np.ndarray,
     return centre + grid[ring, :1] * u + grid[ring, 1:] * w
 
 
-def clip_below(vertices: np.ndarray, z: float) -> np.ndarray:
-    """The part of a flat convex polygon (K, 3) (vertices in order) at most ``z`` (m) high:
-    (K', 3) vertices in the same order, (0, 3) when none of it is that low."""
-    ring = np.asarray(vertices, float).reshape(-1, 3)
-    out = []
-    for a, b in zip(ring, np.roll(ring, -1, axis=0)):
-        if a[2] <= z:
-            out.append(a)
-        if (a[2] - z) * (b[2] - z) < 0:                  # the edge crosses the height
-            out.append(a + (z - a[2]) / (b[2] - a[2]) * (b - a))
-    return np.array(out, float).reshape(-1, 3)
-
-
 def polygon(vertices: np.ndarray, centre=None):
     """A flat convex polygon as a closed body (two triangle fans about ``centre``, by default
     its vertices' mean, back to back): (V, 3) vertices, (F, 3) faces."""
