@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import interaction_tensor as it
 from interaction_tensor.clearance import clearance_offsets, nearest_distance_function, violations
@@ -170,6 +172,99 @@ def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
         "tuning.json", "tuning.md", "tuning_pairs.csv"]
     assert "| placing |" in (tmp_path / "tuning" / "tuning.md").read_text()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["tuning"]
+
+
+class _FakeCheck:
+    """A CollisionCheck stand-in: ``free`` answers from a table and records what it was
+    asked."""
+
+    def __init__(self, free):
+        self.table, self.asked = free, []
+
+    def free(self, i):
+        self.asked.append(i)
+        return bool(self.table[i])
+
+
+def _table_top_reference(pos, score, placed, free, k, radius):
+    """Brute force: placed pairs best first, picked when no pick is within ``radius`` and
+    they do not cross the scene; then the other pairs the same way."""
+    picks = []
+    for group in (np.flatnonzero(placed), np.flatnonzero(~placed)):
+        for i in group[np.argsort(-score[group], kind="stable")]:
+            if len(picks) == k:
+                return picks
+            if all(np.linalg.norm(pos[i] - pos[j]) > radius for j in picks) and free[i]:
+                picks.append(int(i))
+    return picks
+
+
+@given(st.integers(0, 2 ** 31 - 1), st.integers(1, 6))
+@settings(max_examples=60, deadline=None)
+def test_the_tunings_top_is_the_evaluations_ranking(seed, k):
+    from interaction_tensor.evaluation.tuning import table_top
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 80))
+    pos = rng.uniform(0, 1, (n, 3))
+    score = rng.permutation(n) / n                     # no ties
+    placed = rng.uniform(size=n) < 0.4
+    free = rng.uniform(size=n) < 0.7
+    got = table_top(pos, score, placed, k, 0.3, _FakeCheck(free)).tolist()
+    assert got == _table_top_reference(pos, score, placed, free, k, 0.3)
+    # the threshold plays no part: only the placement tests and the collision test
+    assert table_top(pos, score, placed, k, 0.3).tolist() == _table_top_reference(
+        pos, score, placed, np.ones(n, bool), k, 0.3)
+
+
+def test_the_tuning_chooses_the_placement_tests_whose_top_5_are_valid(tmp_path):
+    """Two clearance limits: the lenient one has the larger F1 but lets high-scoring invalid
+    pairs (10 % of their clearance points violated) into the top 5; the top objective
+    takes the strict one, whose top 5 are the valid pairs, and keeps the F1 choice for the
+    record."""
+    from types import SimpleNamespace
+
+    from interaction_tensor.evaluation.tuning import (TuneResult, TuneSettings, _Run,
+                                                      choose_by_tops)
+
+    n = 20
+    pos = np.c_[np.arange(n) * 1.0, np.zeros(n), np.zeros(n)]     # 1 m apart: no suppression
+    bad = np.arange(n) < 10                                        # the 10 best scores
+    feats = {"score": np.linspace(0.9, 0.5, n), "violations": np.where(bad, 10, 0),
+             "clearance_points": np.full(n, 100), "interior_violations": np.zeros(n),
+             "interior_points": np.full(n, 100)}
+    run = _Run("room", "placing-bowl", "placing", SimpleNamespace(radius=0.2), pos,
+               np.zeros(n, np.int64), feats, None)
+    off = ["off", 0.02, 0.1, 90.0]
+
+    def option(limit, f1):
+        return {"threshold": 0.5, "limit": limit, "interior_limit": 1.0, "contact": off,
+                "precision": f1, "recall": f1, "f1": f1, "runs_with_a_valid_accepted": 1,
+                "runs_with_sites": 1}
+    res = TuneResult(curves={"placing": [option(0.2, 0.8), option(0.05, 0.6)]})
+    res.chosen["placing"] = {"threshold": 0.5, "clearance_limit": 0.2, "interior_limit": 1.0,
+                             "contact": off, "precision": 0.8, "recall": 0.8, "f1": 0.8,
+                             "runs_with_a_valid_accepted": 1, "runs_with_sites": 1,
+                             "without_new_tests": {"threshold": 0.5, "limit": 0.2,
+                                                   "precision": 0.8, "recall": 0.8, "f1": 0.8,
+                                                   "runs_with_a_valid_accepted": 1}}
+
+    class Verdicts:
+        def valid(self, r, i):
+            return (not bad[i], "")
+    choose_by_tops(res, [run], Verdicts(), TuneSettings(), lambda _s: None)
+    ch = res.chosen["placing"]
+    assert ch["clearance_limit"] == 0.05 and ch["top_valid"] == 5 and ch["top_judged"] == 5
+    assert ch["by_f1"]["clearance_limit"] == 0.2
+    table = {r["limit"]: r["top_valid"] for r in res.top_objective["placing"]}
+    assert table == {0.2: 0, 0.05: 5}
+    # the record lists every candidate with its top 5
+    from interaction_tensor.evaluation.tuning import write
+
+    res.settings = {"seed": 0}
+    write(res, tmp_path / "tuning")
+    md = (tmp_path / "tuning" / "tuning.md").read_text()
+    assert "| 0.05 | off | off | 0.500 | 60.0 | 5/5 |" in md and "| 0.20 | off | off" in md
 
 
 @pytest.fixture

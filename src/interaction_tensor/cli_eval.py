@@ -106,8 +106,11 @@ def cmd_evaluate(args) -> int:
 def cmd_tune(args) -> int:
     from .evaluation.tuning import TuneSettings, tune, write
 
+    if args.top_candidates < 1:
+        raise InputError("--top-candidates", "must be at least 1")
     st = TuneSettings(examples=_examples(args.examples), objects_dir=_objects_dir(args.objects),
-                      seed=args.seed)
+                      seed=args.seed, objective=args.objective,
+                      top_candidates=args.top_candidates)
     log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
     res = tune(st, log)
     write(res, args.output)
@@ -173,6 +176,12 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="output directory")
     p.add_argument("--objects", default=None, help="directory of real query objects")
     p.add_argument("--examples", nargs="*", help="only these examples (default: all 8)")
+    p.add_argument("--objective", choices=("top", "f1"), default="top",
+                   help="choose the placement tests by their validation top 5 judged valid "
+                        "(top, Table 1's measure, default) or by the F1 of the pair "
+                        "decisions (f1, before 2026-11-26)")
+    p.add_argument("--top-candidates", type=int, default=30,
+                   help="placement tests of largest F1 tried by the top objective (30)")
     seed_option(p)
     quiet_option(p)
     p.set_defaults(func=cmd_tune)

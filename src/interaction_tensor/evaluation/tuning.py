@@ -22,9 +22,16 @@ sofas, beds, benches, rails, pegs, taps, a motorbike-like frame...), with the ju
    distance and fraction: :data:`LIMITS`, :data:`INTERIOR_LIMITS`, :data:`CONTACT_OPTIONS`),
    the pair decisions are compared with the judge: precision, recall and F1, estimated with
    the sample weights, pooled over each affordance's examples and scenes;
-4. the acceptance of largest F1 is kept (ties: the stricter threshold, then the simpler
-   tests); then the top 5 of every (scene, example) under it are judged as well (reported,
-   not in the estimate).
+4. the placement tests are chosen by what Table 1 counts (``TuneSettings.objective``
+   ``top``, since 2026-11-26): of the ``top_candidates`` placement tests of largest F1
+   (each at its best threshold), the one whose top 5 per (scene, example) are most often
+   valid to the judge, ranked as the evaluation ranks them (:func:`table_top`: the pairs
+   that pass the placement and exact collision tests by score, a suppression radius apart,
+   then the others; the threshold plays no part in that ranking); ties: larger F1, then the
+   stricter threshold and the simpler tests. S_aff is that test's best threshold by F1.
+   With objective ``f1`` (before 2026-11-26) the acceptance of largest F1 is kept. The top
+   5 under the choice are reported with the judged pairs (``top`` set, weight 0: not in the
+   estimate).
 
 :func:`tune` runs it and :func:`write` keeps the raw judged pairs (CSV), the curves and the
 choice (JSON, Markdown), so that the choice can be checked and redone.
@@ -99,6 +106,10 @@ class TuneSettings:
     #: apply each affordance's :data:`FIXED_TESTS` first (False: as before 2026-11-26, when
     #: the acceptance was tuned without them)
     fixed_tests: bool = True
+    #: ``top``: the placement tests whose validation top 5 are most often valid, among the
+    #: ``top_candidates`` of largest F1 (Table 1's measure); ``f1``: the largest F1
+    objective: str = "top"
+    top_candidates: int = 30
 
 
 @dataclass
@@ -108,6 +119,7 @@ class TuneResult:
     curves: dict = field(default_factory=dict)      # affordance -> best row per test
     chosen: dict = field(default_factory=dict)      # affordance -> the acceptance
     settings: dict = field(default_factory=dict)
+    top_objective: dict = field(default_factory=dict)   # affordance -> candidates' top 5
 
 
 def _sample(keys: np.ndarray, idx: np.ndarray, per_band, rng):
@@ -275,7 +287,12 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
                 f"judged {len(pick):>4} (valid {sum(r['valid'] for r in judged):>3}) sites "
                 f"{kinds.get(SITE_OF[aff], 0)} {time.perf_counter() - t1:.0f} s")
     res.curves, res.chosen = choose(res.rows, res.runs)
-    _judge_tops(res, keep, models, st, log)
+    verdicts = _TopJudge(models)
+    if st.objective == "top":
+        choose_by_tops(res, keep, verdicts, st, log)
+    elif st.objective != "f1":
+        raise ValueError(f"unknown tuning objective {st.objective!r}: top or f1")
+    _judge_tops(res, keep, verdicts, st, log)
     res.settings["total_seconds"] = round(time.perf_counter() - t0, 1)
     return res
 
@@ -285,41 +302,125 @@ def _value(v):
     return round(v, 5) if isinstance(v, float) else v
 
 
-def _judge_tops(res: TuneResult, runs: list, models: dict, st: TuneSettings, log) -> None:
-    """Judge the top ``st.top_k`` of every run under its affordance's chosen acceptance
-    (rows with ``top`` set and weight 0: reported, not in the estimate)."""
-    from ..detect import suppression_radius
-    from ..examples import validation
+def table_top(position, score, placed, k: int, radius: float, check=None, index=None):
+    """The top ``k`` of one run as the evaluation ranks them (:func:`..detect.rank_pairs`):
+    the pairs that pass the placement tests (``placed``) and, with ``check`` (a
+    :class:`..detect.CollisionCheck`, by pair index), the exact collision tests, by score,
+    ``radius`` apart; then, when fewer than ``k``, the other pairs by score, those that cross
+    the scene left out. ``index`` maps the arrays' rows to the check's pair indices (default:
+    the same). Returns row indices, best first."""
     from ..predictions import top_k
-    from ..settings import DetectSettings
-    from .judge import JudgeScene
 
-    by_scene = {}
+    score = np.asarray(score, float)
+    rows = np.arange(len(score)) if index is None else np.asarray(index)
+
+    def free(i):
+        return None if check is None else check.free(int(rows[i]))
+    ok = np.flatnonzero(placed)
+    first = ok[top_k(position[ok], score[ok], k, radius,
+                     accept=None if check is None else (lambda j: free(ok[j])))]
+    if len(first) >= k:
+        return first
+    rest = np.flatnonzero(~np.asarray(placed, bool))
+    cand = np.r_[first, rest]
+    key = np.r_[score[first] + 10.0, score[rest]]
+    n_first = len(first)
+    got = top_k(position[cand], key, k, radius,
+                accept=lambda j: j < n_first or free(cand[j]) is not False)
+    return cand[got]
+
+
+class _TopJudge:
+    """Verdicts of top poses, judged once per (scene, example, pair): the objective's
+    candidates share most of their picks."""
+
+    def __init__(self, models: dict):
+        self.models = models
+        self.scenes = {}
+        self.cache = {}
+
+    def valid(self, run, i) -> tuple:
+        from ..examples import validation
+        from .judge import JudgeScene
+
+        key = (run.scene, run.example, int(i))
+        if key not in self.cache:
+            if run.scene not in self.scenes:
+                self.scenes[run.scene] = JudgeScene(validation.build_scene(run.scene).geometry)
+            _, _, judge = self.models[run.example]
+            v = judge.judge(self.scenes[run.scene],
+                            run.tensor.pose(run.position[i], 2 * np.pi * run.orient[i] / 8))
+            self.cache[key] = (bool(v.valid), "; ".join(v.reasons))
+        return self.cache[key]
+
+
+def _radius(run) -> float:
+    """The evaluation's suppression radius of a run (half the query's radius)."""
+    return 0.5 * float(run.tensor.radius)
+
+
+def choose_by_tops(res: TuneResult, runs: list, verdicts: _TopJudge, st: TuneSettings,
+                   log) -> None:
+    """Re-choose each affordance's placement tests by Table 1's measure (module docstring,
+    step 4): ``res.chosen[aff]`` becomes the candidate of most valid top poses, with its
+    top-5 counts; ``res.top_objective[aff]`` lists every candidate's."""
+    for aff, ch in list(res.chosen.items()):
+        cands = sorted(res.curves.get(aff, []), key=lambda r: (r["f1"], _strictness(r)),
+                       reverse=True)[:st.top_candidates]
+        rs = [r for r in runs if r.affordance == aff]
+        table = []
+        for c in cands:
+            valid = judged = 0
+            for r in rs:
+                placed = accepts(r.features, 0.0, c["limit"], c["interior_limit"],
+                                 tuple(c["contact"]))
+                for i in table_top(r.position, r.features["score"], placed, st.top_k,
+                                   _radius(r), r.check):
+                    valid += verdicts.valid(r, i)[0]
+                    judged += 1
+            table.append({**c, "top_valid": valid, "top_judged": judged,
+                          "top_precision": valid / judged if judged else float("nan")})
+            log(f"{aff:>8} limit {c['limit']:.2f} interior {c['interior_limit']:.2f} "
+                f"contact {c['contact']}: top {valid}/{judged} (F1 {c['f1']:.3f})")
+        if not table:
+            continue
+        best = max(table, key=lambda r: (r["top_valid"] / max(r["top_judged"], 1), r["f1"],
+                                         _strictness(r)))
+        res.top_objective[aff] = table
+        res.chosen[aff] = {**ch, "threshold": best["threshold"],
+                           "clearance_limit": best["limit"],
+                           "interior_limit": best["interior_limit"],
+                           "contact": best["contact"], "precision": best["precision"],
+                           "recall": best["recall"], "f1": best["f1"],
+                           "runs_with_a_valid_accepted": best["runs_with_a_valid_accepted"],
+                           "top_valid": best["top_valid"], "top_judged": best["top_judged"],
+                           "by_f1": {k: ch[k] for k in ("threshold", "clearance_limit",
+                                                         "interior_limit", "contact",
+                                                         "precision", "recall", "f1")}}
+
+
+def _judge_tops(res: TuneResult, runs: list, verdicts: _TopJudge, st: TuneSettings,
+                log) -> None:
+    """Judge the top ``st.top_k`` of every run under its affordance's chosen acceptance,
+    ranked as the evaluation ranks them (:func:`table_top`; rows with ``top`` set and weight
+    0: reported, not in the estimate)."""
     for r in runs:
-        by_scene.setdefault(r.scene, []).append(r)
-    for sname, rs in by_scene.items():
-        jscene = JudgeScene(validation.build_scene(sname).geometry)
-        for r in rs:
-            ch = res.chosen.get(r.affordance)
-            if ch is None:
-                continue
-            ok = np.flatnonzero(accepts(r.features, ch["threshold"], ch["clearance_limit"],
-                                        ch["interior_limit"], tuple(ch["contact"])))
-            radius = suppression_radius(r.tensor, DetectSettings())
-            accept = None if r.check is None else (lambda j: r.check.free(int(ok[j])))
-            tops = ok[top_k(r.position[ok], r.features["score"][ok], st.top_k, radius,
-                            accept=accept)]
-            _, _, judge = models[r.example]
-            for i in tops:
-                v = judge.judge(jscene, r.tensor.pose(r.position[i], 2 * np.pi * r.orient[i] / 8))
-                res.rows.append({
-                    "scene": sname, "example": r.example, "affordance": r.affordance,
-                    "pair": int(i), "near_site": None,
-                    **{c: _value(r.features[c][i]) for c in r.features},
-                    "free": None if r.check is None else r.check.free(int(i)),
-                    "weight": 0.0, "top": True, "valid": bool(v.valid),
-                    "reasons": "; ".join(v.reasons)})
-            log(f"{sname:>15} {r.example:<16} top {len(tops)} judged")
+        ch = res.chosen.get(r.affordance)
+        if ch is None:
+            continue
+        placed = accepts(r.features, 0.0, ch["clearance_limit"], ch["interior_limit"],
+                         tuple(ch["contact"]))
+        tops = table_top(r.position, r.features["score"], placed, st.top_k, _radius(r),
+                         r.check)
+        for i in tops:
+            valid, reasons = verdicts.valid(r, i)
+            res.rows.append({
+                "scene": r.scene, "example": r.example, "affordance": r.affordance,
+                "pair": int(i), "near_site": None,
+                **{c: _value(r.features[c][i]) for c in r.features},
+                "free": None if r.check is None else r.check.free(int(i)),
+                "weight": 0.0, "top": True, "valid": valid, "reasons": reasons})
+        log(f"{r.scene:>15} {r.example:<16} top {len(tops)} judged")
 
 
 def curve(rows, thresholds=THRESHOLDS, limit: float = 1.0, interior_limit: float = 1.0,
@@ -428,7 +529,8 @@ def write(res: TuneResult, out_dir) -> None:
     with atomic_dir(out_dir, "tuning.json") as out:
         write_csv(out / "tuning_pairs.csv", res.rows, COLUMNS)
         write_json(out / "tuning.json", {"settings": res.settings, "chosen": res.chosen,
-                                         "runs": res.runs, "curves": _compact(res.curves)})
+                                         "runs": res.runs, "curves": _compact(res.curves),
+                                         "top_objective": _compact(res.top_objective)})
         lines = ["# The acceptance of each affordance, tuned on the procedural validation "
                  "scenes", "",
                  "| affordance | S_aff | clearance limit | interior limit | contact test | "
@@ -452,6 +554,22 @@ def write(res: TuneResult, out_dir) -> None:
             lines.append(f"| {aff} | {o['threshold']:.3f} | {o['limit']:.2f} | "
                          f"{_pct(o['precision'])} | {_pct(o['recall'])} | {_pct(o['f1'])} | "
                          f"{o['runs_with_a_valid_accepted']}/{ch['runs_with_sites']} |")
+        for aff, table in res.top_objective.items():
+            by = res.chosen[aff].get("by_f1", {})
+            lines += ["", f"{aff}: the {len(table)} placement tests of largest F1, by their "
+                          "validation top 5 judged valid (ranked as the evaluation ranks); "
+                          f"largest F1 alone chose clearance {by.get('clearance_limit')}, "
+                          f"interior {by.get('interior_limit')}, contact {by.get('contact')}, "
+                          f"S_aff {by.get('threshold')}:", "",
+                      "| clearance limit | interior limit | contact test | S_aff | F1 | "
+                      "top 5 valid |", "|---|---|---|---|---|---|"]
+            for r in sorted(table, key=lambda r: (-r["top_precision"], -r["f1"])):
+                mode, d, f, a = r["contact"]
+                contact = "off" if mode == "off" else (
+                    f"{mode}, {100 * d:g} cm, {100 * f:g} %" + ("" if a >= 90 else f", {a:g} deg"))
+                inner = "off" if r["interior_limit"] >= 1 else f"{r['interior_limit']:.2f}"
+                lines.append(f"| {r['limit']:.2f} | {inner} | {contact} | {r['threshold']:.3f} | "
+                             f"{_pct(r['f1'])} | {r['top_valid']}/{r['top_judged']} |")
         lines += ["", "Top-5 poses judged valid per (scene, example), under the chosen "
                       "acceptance:", ""]
         for r in res.runs:
