@@ -127,6 +127,7 @@ def through(centres, axes, ring, reach, slab, max_cos, grid) -> np.ndarray:
         through_hits(np.ascontiguousarray(centres, np.float64),
                      np.ascontiguousarray(axes, np.float64),
                      np.ascontiguousarray(ring, np.float64), float(reach), float(slab),
-                     float(max_cos), grid.points, grid.normals, grid.starts, np.asarray(grid.origin, np.float64),
-                     float(grid.cell), np.asarray(grid.dims, np.int64), out)
+                     float(max_cos), grid.points, grid.normals, grid.starts,
+                     np.asarray(grid.origin, np.float64), float(grid.cell),
+                     np.asarray(grid.dims, np.int64), out)
     return out.astype(bool)

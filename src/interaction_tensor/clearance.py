@@ -91,14 +91,16 @@ FAILS_THROUGH = 9
 #: samples within about a spacing of the crossing.
 THROUGH_SLAB = 1.0
 #: Smallest angle (degrees) at which a surface must cross the plane of the through-section
-#: for its samples to count (not 45: a hook turned 45 degrees to a wall, one of the 8
-#: orientations, has the wall across it at exactly that): a rail or a panel's edge through the hook crosses it at about
+#: for its samples to count: a rail or a panel's edge through the hook crosses it at about
 #: 90; a wall or a board lying in that plane (a hook flat against it, the handbag's strap
 #: along a cabinet's side) does not go through the opening (a fifth of the handbag's random
-#: pairs in the validation rooms crossed it only so, the triangle test none).
+#: pairs in the validation rooms crossed it only so). Not 45: a hook turned 45 degrees to a
+#: wall, one of the 8 orientations, has the wall across it at exactly that.
 THROUGH_MIN_ANGLE = 30.0
-#: Placements per chunk of the reference through test (bounds its neighbour lists).
-THROUGH_CHUNK = 20_000
+#: Placements per chunk of the reference through test: its neighbour lists hold about 40
+#: samples a placement at 1 cm, each tested against every edge of the polygon (about 25:
+#: 400 bytes each), so a chunk takes some 60 MB.
+THROUGH_CHUNK = 4_000
 #: Contact modes: no contact test, the main group (at the reference point), every group.
 CONTACT_MODES = ("off", "main", "all")
 
