@@ -239,7 +239,7 @@ class DetectSettings:
     #: 12 small-scene runs: on office-desk4 the hanger's top 5 (on chair armrests, all valid)
     #: took 5,889 tests (13 s, about 2 ms each: the rest are hooks through desk tops and
     #: seats, where something does go through the hook), the handbag's two 26,989 (28 s); a
-    #: seated person's top 5 there took 1,143 (3 s). So at most about 2 minutes per ranking.
+    #: seated person's top 5 there took 1,143 (3 s): about 2 minutes when all are spent.
     collision: bool = True
     collision_max_tests: int = 50_000
     #: Predictions kept after non-maximum suppression.
