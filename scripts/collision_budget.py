@@ -22,6 +22,7 @@ import numpy as np
 def main(argv=None) -> int:
     import interaction_tensor as it
     from interaction_tensor.detect import collision_check, rank_pairs
+    from interaction_tensor.evaluation.common import ranking_radius
     from interaction_tensor.evaluation.judge import Judge, JudgeScene
     from interaction_tensor.examples import interactions
     from interaction_tensor.io import load_geometry
@@ -43,7 +44,7 @@ def main(argv=None) -> int:
         sample_fraction=0.3, top_k=0, seed=args.seed, keypoint_order="weight",
         neighbour_cache=True, collision_max_tests=args.budget))
     t = time.perf_counter()
-    top, score, ok = rank_pairs(det, args.k, 0.5 * tensor.radius)   # the evaluation's radius
+    top, score, ok = rank_pairs(det, args.k, ranking_radius(tensor))
     seconds = time.perf_counter() - t
     check = collision_check(det).stats()
     geometry = load_geometry(args.scene)

@@ -13,14 +13,18 @@ from numba import njit, prange
 
 
 @njit(cache=True, inline="always")
+def _span(q, r, o, cell, n):
+    """The cells (first, last) along one axis that meet [q - r, q + r]."""
+    return (max(int(math.floor((q - r - o) / cell)), 0),
+            min(int(math.floor((q + r - o) / cell)), n - 1))
+
+
+@njit(cache=True, inline="always")
 def _occupied_within(qx, qy, qz, r, pts, starts, ox, oy, oz, cell, nx, ny, nz):
     """True when some sample lies at a distance < r from q."""
-    i0 = max(int(math.floor((qx - r - ox) / cell)), 0)
-    i1 = min(int(math.floor((qx + r - ox) / cell)), nx - 1)
-    j0 = max(int(math.floor((qy - r - oy) / cell)), 0)
-    j1 = min(int(math.floor((qy + r - oy) / cell)), ny - 1)
-    k0 = max(int(math.floor((qz - r - oz) / cell)), 0)
-    k1 = min(int(math.floor((qz + r - oz) / cell)), nz - 1)
+    i0, i1 = _span(qx, r, ox, cell, nx)
+    j0, j1 = _span(qy, r, oy, cell, ny)
+    k0, k1 = _span(qz, r, oz, cell, nz)
     for i in range(i0, i1 + 1):
         for j in range(j0, j1 + 1):
             base = (i * ny + j) * nz
@@ -77,12 +81,9 @@ def through_hits(centres, axes, ring, reach, slab, max_cos, pts, nrm, starts, or
     k_n = ring.shape[0]
     for i in prange(centres.shape[0]):
         cx, cy, cz = centres[i, 0], centres[i, 1], centres[i, 2]
-        i0 = max(int(math.floor((cx - reach - ox) / cell)), 0)
-        i1 = min(int(math.floor((cx + reach - ox) / cell)), nx - 1)
-        j0 = max(int(math.floor((cy - reach - oy) / cell)), 0)
-        j1 = min(int(math.floor((cy + reach - oy) / cell)), ny - 1)
-        k0 = max(int(math.floor((cz - reach - oz) / cell)), 0)
-        k1 = min(int(math.floor((cz + reach - oz) / cell)), nz - 1)
+        i0, i1 = _span(cx, reach, ox, cell, nx)
+        j0, j1 = _span(cy, reach, oy, cell, ny)
+        k0, k1 = _span(cz, reach, oz, cell, nz)
         found = False
         for a in range(i0, i1 + 1):
             if found:

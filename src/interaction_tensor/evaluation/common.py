@@ -23,6 +23,12 @@ PAPER = {"placing": {"iT": (96.92, 98.44), "Naive": (3.08, 5.97), "BS": (3.08, 5
 
 
 
+def ranking_radius(tensor) -> float:
+    """Suppression radius (m) of the evaluation's top and bottom poses: half the query
+    object's radius (the runner's ranking, and the tuning's that scores it)."""
+    return 0.5 * float(tensor.radius)
+
+
 def machine() -> str:
     import os
 

@@ -45,7 +45,7 @@ import numpy as np
 from ..errors import InputError
 from ..detect import CACHE_AUTO_FRACTION
 
-from .common import AFFORDANCES, METHODS  # noqa: F401 (METHODS: re-exported)
+from .common import AFFORDANCES, METHODS, ranking_radius  # noqa: F401 (METHODS: re-exported)
 
 
 @dataclass
@@ -194,7 +194,7 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
             aff = ex.spec.affordance
             frac = (st.sample_fraction if st.test_points is None
                     else min(1.0, st.test_points / len(scene)))
-            radius = 0.5 * tensor.radius
+            radius = ranking_radius(tensor)
             cand = None
             for m in st.methods:
                 t1 = time.perf_counter()

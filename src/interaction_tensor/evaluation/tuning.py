@@ -44,6 +44,8 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from .common import ranking_radius
+
 #: Site kind of each affordance (:mod:`..examples.furniture`).
 SITE_OF = {"placing": "place", "sitting": "seat", "hanging": "hang", "filling": "fill",
            "riding": "astride"}
@@ -302,20 +304,18 @@ def _value(v):
     return round(v, 5) if isinstance(v, float) else v
 
 
-def table_top(position, score, placed, k: int, radius: float, check=None, index=None):
+def table_top(position, score, placed, k: int, radius: float, check=None):
     """The top ``k`` of one run as the evaluation ranks them (:func:`..detect.rank_pairs`):
     the pairs that pass the placement tests (``placed``) and, with ``check`` (a
     :class:`..detect.CollisionCheck`, by pair index), the exact collision tests, by score,
     ``radius`` apart; then, when fewer than ``k``, the other pairs by score, those that cross
-    the scene left out. ``index`` maps the arrays' rows to the check's pair indices (default:
-    the same). Returns row indices, best first."""
+    the scene left out. Returns pair indices, best first."""
     from ..predictions import top_k
 
     score = np.asarray(score, float)
-    rows = np.arange(len(score)) if index is None else np.asarray(index)
 
     def free(i):
-        return None if check is None else check.free(int(rows[i]))
+        return None if check is None else check.free(int(i))
     ok = np.flatnonzero(placed)
     first = ok[top_k(position[ok], score[ok], k, radius,
                      accept=None if check is None else (lambda j: free(ok[j])))]
@@ -354,11 +354,6 @@ class _TopJudge:
         return self.cache[key]
 
 
-def _radius(run) -> float:
-    """The evaluation's suppression radius of a run (half the query's radius)."""
-    return 0.5 * float(run.tensor.radius)
-
-
 def choose_by_tops(res: TuneResult, runs: list, verdicts: _TopJudge, st: TuneSettings,
                    log) -> None:
     """Re-choose each affordance's placement tests by Table 1's measure (module docstring,
@@ -375,7 +370,7 @@ def choose_by_tops(res: TuneResult, runs: list, verdicts: _TopJudge, st: TuneSet
                 placed = accepts(r.features, 0.0, c["limit"], c["interior_limit"],
                                  tuple(c["contact"]))
                 for i in table_top(r.position, r.features["score"], placed, st.top_k,
-                                   _radius(r), r.check):
+                                   ranking_radius(r.tensor), r.check):
                     valid += verdicts.valid(r, i)[0]
                     judged += 1
             table.append({**c, "top_valid": valid, "top_judged": judged,
@@ -410,8 +405,8 @@ def _judge_tops(res: TuneResult, runs: list, verdicts: _TopJudge, st: TuneSettin
             continue
         placed = accepts(r.features, 0.0, ch["clearance_limit"], ch["interior_limit"],
                          tuple(ch["contact"]))
-        tops = table_top(r.position, r.features["score"], placed, st.top_k, _radius(r),
-                         r.check)
+        tops = table_top(r.position, r.features["score"], placed, st.top_k,
+                         ranking_radius(r.tensor), r.check)
         for i in tops:
             valid, reasons = verdicts.valid(r, i)
             res.rows.append({
