@@ -183,18 +183,24 @@ class _FakeCheck:
 
     def free(self, i):
         self.asked.append(i)
-        return bool(self.table[i])
+        return self.table[i]
 
 
 def _table_top_reference(pos, score, placed, free, k, radius):
-    """Brute force: placed pairs best first, picked when no pick is within ``radius`` and
-    they do not cross the scene; then the other pairs the same way."""
+    """Brute force: placed pairs that pass the collision test best first, picked when no
+    pick is within ``radius``; then the other pairs that do not cross the scene, with them
+    the placed pairs the check could not test (None: its tests are spent); then the pairs
+    that cross it."""
     picks = []
-    for group in (np.flatnonzero(placed), np.flatnonzero(~placed)):
+    free = np.asarray(free, object)
+    passes = np.array([f is True for f in free])
+    crosses = np.array([f is False for f in free])
+    groups = (placed & passes, ~(placed & passes) & ~crosses, crosses)
+    for group in map(np.flatnonzero, groups):
         for i in group[np.argsort(-score[group], kind="stable")]:
             if len(picks) == k:
                 return picks
-            if all(np.linalg.norm(pos[i] - pos[j]) > radius for j in picks) and free[i]:
+            if all(np.linalg.norm(pos[i] - pos[j]) > radius for j in picks):
                 picks.append(int(i))
     return picks
 
@@ -209,12 +215,13 @@ def test_the_tunings_top_is_the_evaluations_ranking(seed, k):
     pos = rng.uniform(0, 1, (n, 3))
     score = rng.permutation(n) / n                     # no ties
     placed = rng.uniform(size=n) < 0.4
-    free = rng.uniform(size=n) < 0.7
+    # True passes, False crosses the scene, None: not tested (the tests are spent)
+    free = [(True, False, None)[c] for c in rng.choice(3, n, p=[0.6, 0.25, 0.15])]
     got = table_top(pos, score, placed, k, 0.3, _FakeCheck(free)).tolist()
     assert got == _table_top_reference(pos, score, placed, free, k, 0.3)
     # the threshold plays no part: only the placement tests and the collision test
     assert table_top(pos, score, placed, k, 0.3).tolist() == _table_top_reference(
-        pos, score, placed, np.ones(n, bool), k, 0.3)
+        pos, score, placed, [True] * n, k, 0.3)
 
 
 def test_the_tuning_chooses_the_placement_tests_whose_top_5_are_valid(tmp_path):

@@ -303,3 +303,40 @@ def test_the_ground_setting_survives_a_file_and_a_bad_one_is_refused(hanging, tm
             it.InteractionTensor.load(tmp_path / name)
     old = descriptor_with_header(tmp_path / "g.npz", tmp_path / "old.npz", drop="below_ground")
     assert it.InteractionTensor.load(old).below_ground is None
+
+
+def test_the_tunings_top_ranks_untested_placements_as_the_evaluation_does(hanging):
+    """With the tests allowed spent part way, the tuning's top k (``table_top``) over the
+    full scores picks what the evaluation's ranking of a fresh detection picks with the same
+    allowance: a placement it could not test ranks with the pairs that fail a test, not
+    above them nor out. The tuning's candidates share one check's verdicts, each ranked
+    with an allowance of its own (``RankingCheck``)."""
+    from interaction_tensor.detect import full_scores
+    from interaction_tensor.evaluation.tuning import RankingCheck, table_top
+
+    ex, tensor = hanging
+    scene = it.prepare_scene(ex.scene_object, 0.01, seed=0)
+    d = np.linalg.norm(scene.points - ex.support_point, axis=1)
+    test = np.r_[np.argsort(d)[:6], np.flatnonzero(d > 0.3)[::97]]
+
+    def fresh(budget):
+        return it.detect(scene, tensor, it.DetectSettings(
+            **{**OPEN, "top_k": 0}, collision_max_tests=budget), test_indices=test)
+
+    base = fresh(10 ** 6)
+    full, placed = full_scores(base, np.arange(len(base.pair_point)))
+    position = scene.points[base.pair_point]
+    radius = suppression_radius(tensor, base.settings)
+    shared = CollisionCheck(base)
+    untested_placed = 0
+    for budget in (0, 1, 2, 3, 6, 12, 1000):
+        det = fresh(budget)
+        idx, _, _ = rank_pairs(det, 4, radius)
+        check = det.collisions
+        assert check.tests <= budget
+        assert table_top(position, full, placed, 4, radius, check).tolist() == idx.tolist()
+        view = RankingCheck(shared, budget)
+        assert table_top(position, full, placed, 4, radius, view).tolist() == idx.tolist()
+        assert view.n_asked == check.tests and view.exhausted == check.exhausted
+        untested_placed += int((placed[idx] & (check.state[idx] < 0)).sum())
+    assert untested_placed > 0            # the case in question happened

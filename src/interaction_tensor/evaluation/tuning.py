@@ -112,6 +112,9 @@ class TuneSettings:
     #: ``top_candidates`` of largest F1 (Table 1's measure); ``f1``: the largest F1
     objective: str = "top"
     top_candidates: int = 30
+    #: collision tests allowed to one ranking (None: detection's ``collision_max_tests``);
+    #: each candidate's top is ranked with its own allowance, the verdicts shared
+    collision_max_tests: int | None = None
 
 
 @dataclass
@@ -256,8 +259,11 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
             det = detect(scene, tensor, it.DetectSettings(
                 threshold=1e-9, clearance_max_violations=1.0, contact=False, interior=False,
                 ground=False, feet=False, straddle=False, mount=False, through=False, top_k=0,
-                seed=st.seed,
-                neighbour_cache=True), test_indices=test)   # detection's collision budget
+                seed=st.seed, neighbour_cache=True,
+                # shared by the judged sample and every candidate's ranking, each of which
+                # has detection's allowance of its own (RankingCheck)
+                collision_max_tests=ranking_budget(st) * (st.top_candidates + 2)),
+                test_indices=test)
             feats = _features(det, tensor, scene, grid)
             is_near = near[det.pair_point]
             weight = np.where(is_near, 1.0, len(others) / len(back))
@@ -308,26 +314,86 @@ def table_top(position, score, placed, k: int, radius: float, check=None):
     """The top ``k`` of one run as the evaluation ranks them (:func:`..detect.rank_pairs`):
     the pairs that pass the placement tests (``placed``) and, with ``check`` (a
     :class:`..detect.CollisionCheck`, by pair index), the exact collision tests, by score,
-    ``radius`` apart; then, when fewer than ``k``, the other pairs by score, those that cross
-    the scene left out. Returns pair indices, best first."""
+    ``radius`` apart; then the other pairs by score, with them the placed pairs that could
+    not be tested (the check answers None: its tests are spent); last those that cross the
+    scene. Returns pair indices, best first."""
     from ..predictions import top_k
 
     score = np.asarray(score, float)
+    position = np.asarray(position, float)
+    ok = np.asarray(placed, bool).copy()
+    # groups 2 (placed), 1 (the others), 0 (crossing the scene), a score in [0, 1] within
+    key = score + np.where(ok, 20.0, 10.0)
+    if check is None:
+        return np.asarray(top_k(position, key, k, radius), np.int64)
+    crossed = np.zeros(len(score), bool)
+    demoted = []
 
-    def free(i):
-        return None if check is None else check.free(int(i))
-    ok = np.flatnonzero(placed)
-    first = ok[top_k(position[ok], score[ok], k, radius,
-                     accept=None if check is None else (lambda j: free(ok[j])))]
-    if len(first) >= k:
-        return first
-    rest = np.flatnonzero(~np.asarray(placed, bool))
-    cand = np.r_[first, rest]
-    key = np.r_[score[first] + 10.0, score[rest]]
-    n_first = len(first)
-    got = top_k(position[cand], key, k, radius,
-                accept=lambda j: j < n_first or free(cand[j]) is not False)
-    return cand[got]
+    def accept(j):
+        if crossed[j]:
+            return True
+        free = check.free(int(j))
+        if free or (free is None and not ok[j]):
+            return True
+        # crossing: below every other pair; placed but untested: with the failed ones
+        ok[j], crossed[j] = False, free is False
+        key[j] = score[j] + (0.0 if free is False else 10.0)
+        demoted.append(j)
+        return False
+
+    while True:
+        demoted.clear()
+        got = top_k(position, key, k, radius, accept=accept)
+        if getattr(check, "exhausted", False):   # untested pairs cannot be confirmed
+            lost = np.flatnonzero(ok & (np.asarray(check.state) < 0))
+            ok[lost], key[lost] = False, score[lost] + 10.0
+            demoted.extend(lost)
+        if not demoted:
+            return np.asarray(got, np.int64)
+
+
+class RankingCheck:
+    """One ranking's view of a run's :class:`..detect.CollisionCheck`, as a detection's own
+    ranking would have it: the verdicts are shared (each pair is tested once for all the
+    candidates of the tuning), the tests allowed (``budget`` distinct pairs asked) are this
+    ranking's own; past them :meth:`free` answers None and ``exhausted`` is set. ``state``:
+    the shared verdicts of the pairs this ranking asked, -1 elsewhere."""
+
+    def __init__(self, check, budget: int):
+        self.check, self.budget = check, int(budget)
+        self.asked = np.zeros(len(check.state), bool)
+        self.n_asked = 0
+        self.exhausted = False
+
+    def free(self, i: int):
+        if not self.asked[i]:
+            if self.n_asked >= self.budget:
+                self.exhausted = True
+                return None
+            self.asked[i] = True
+            self.n_asked += 1
+        free = self.check.free(int(i))
+        self.exhausted |= free is None            # the shared allowance is spent too
+        return free
+
+    @property
+    def state(self) -> np.ndarray:
+        return np.where(self.asked, self.check.state, -1)
+
+
+def _ranking_check(run, st: "TuneSettings"):
+    """A fresh :class:`RankingCheck` of ``run`` (None when its collision test is off)."""
+    if run.check is None or not run.check.on:
+        return None
+    return RankingCheck(run.check, ranking_budget(st))
+
+
+def ranking_budget(st: "TuneSettings") -> int:
+    """The collision tests one ranking may make (``st.collision_max_tests`` or detection's)."""
+    from ..detect import DetectSettings
+
+    return int(st.collision_max_tests if st.collision_max_tests is not None
+               else DetectSettings().collision_max_tests)
 
 
 class _TopJudge:
@@ -370,7 +436,7 @@ def choose_by_tops(res: TuneResult, runs: list, verdicts: _TopJudge, st: TuneSet
                 placed = accepts(r.features, 0.0, c["limit"], c["interior_limit"],
                                  tuple(c["contact"]))
                 for i in table_top(r.position, r.features["score"], placed, st.top_k,
-                                   ranking_radius(r.tensor), r.check):
+                                   ranking_radius(r.tensor), _ranking_check(r, st)):
                     valid += verdicts.valid(r, i)[0]
                     judged += 1
             table.append({**c, "top_valid": valid, "top_judged": judged,
@@ -406,7 +472,7 @@ def _judge_tops(res: TuneResult, runs: list, verdicts: _TopJudge, st: TuneSettin
         placed = accepts(r.features, 0.0, ch["clearance_limit"], ch["interior_limit"],
                          tuple(ch["contact"]))
         tops = table_top(r.position, r.features["score"], placed, st.top_k,
-                         ranking_radius(r.tensor), r.check)
+                         ranking_radius(r.tensor), _ranking_check(r, st))
         for i in tops:
             valid, reasons = verdicts.valid(r, i)
             res.rows.append({
