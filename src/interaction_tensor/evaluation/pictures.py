@@ -33,9 +33,12 @@ def _samples(geometry, spacing: float, seed: int = 0, limit: int = 2_500_000):
 
 def closeup(scene_points, scene_normals, query_points, query_normals, pose, colour,
             margin: float | None = None, size=PANEL, azimuths=(210, 300, 30, 120),
-            elevation: float = 22.0, spacing: float = 0.01, cut: float = 0.05) -> np.ndarray:
+            elevation: float = 22.0, spacing: float = 0.01, cut: float = 0.05,
+            touch: float = 0.03) -> np.ndarray:
     """(H, W, 3) uint8: the posed query object and the scene within ``margin`` (m; default
-    the object's size, at least 0.3 m, and 0.4 m above it: a tap over a mug) of it."""
+    the object's size, at least 0.3 m, and 0.4 m above it: a tap over a mug) of it, from
+    the side that sees most of it; the scene points that would still hide it (a cabinet
+    door, a panel more than ``touch`` m in front of it) are left out."""
     from ..viz.raster import Canvas, frame_points
 
     rot, t = pose[:3, :3], pose[:3, 3]
@@ -71,11 +74,36 @@ def closeup(scene_points, scene_normals, query_points, query_normals, pose, colo
     cut_away = frac < 0.5
     if cut_away:
         best_az, _ = best_view(True)
-    cv = Canvas(camera(best_az, *size, cut_away), supersample=2)
-    cv.points(sp, SCENE, sn, size=spacing * 1.6)
-    qs = float(np.sqrt(np.ptp(q, axis=0).prod() ** (2 / 3) / max(len(q), 1)) * 1.6)
-    cv.points(q, colour, qn, size=max(qs, 0.004))
+    cam = camera(best_az, *size, cut_away)
+    qs = max(float(np.sqrt(np.ptp(q, axis=0).prod() ** (2 / 3) / max(len(q), 1)) * 1.6), 0.004)
+    front = _in_front(cam, sp, q, qs, touch)
+    cv = Canvas(cam, supersample=2)
+    cv.points(sp[~front], SCENE, sn[~front], size=spacing * 1.6)
+    cv.points(q, colour, qn, size=qs)
     return cv.image()
+
+
+def _in_front(cam, scene_points, q, q_size: float, touch: float, halo_px: int = 4) -> np.ndarray:
+    """(N,) bool: the scene points that would hide the posed object ``q`` from ``cam``: over
+    its silhouette (widened by ``halo_px`` pixels) and more than ``touch`` m nearer than it
+    there. What touches the object (a rail through a hook, a seat under a person) lies
+    within ``touch`` and stays."""
+    from scipy.ndimage import minimum_filter
+
+    from ..viz.raster import Canvas
+
+    obj = Canvas(cam, supersample=1)
+    obj.points(q, (0, 0, 0), size=q_size, lit=False)
+    depth = minimum_filter(obj.depth.reshape(obj.h, obj.w), size=2 * halo_px + 1,
+                           mode="constant", cval=np.inf)
+    px, py, z = cam.project(scene_points)
+    ix, iy = np.rint(px).astype(np.int64), np.rint(py).astype(np.int64)
+    inside = (ix >= 0) & (ix < obj.w) & (iy >= 0) & (iy < obj.h)
+    out = np.zeros(len(z), bool)
+    d = depth[iy[inside], ix[inside]]             # inf off the silhouette
+    hit = np.isfinite(d)
+    out[np.flatnonzero(inside)[hit]] = z[inside][hit] < d[hit] - touch
+    return out
 
 
 def sheet(path, scene_geometry, query_geometry, poses, valid, captions, title: str,

@@ -1,0 +1,37 @@
+"""The evaluation's close-up pictures show the posed object, whatever stands in front of it."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from interaction_tensor.evaluation import pictures
+from interaction_tensor.examples.procedural import box_part, parts_mesh
+
+
+def _green(img: np.ndarray) -> int:
+    """Pixels of the valid colour, whatever their shading (the scene is grey)."""
+    r, g, b = img.astype(int).transpose(2, 0, 1)
+    return int(((g - r > 40) & (g - b > 30)).sum())
+
+
+def test_an_object_shut_in_a_cabinet_is_drawn_in_front_of_its_doors():
+    """A 10 cm box inside a closed 30 cm cabinet, its doors 4 cm from it on every side
+    (closer than the near-plane cut): the picture shows the box, and the cabinet round it."""
+    cabinet = parts_mesh([
+        box_part("floor", (0, 0, -0.155), (0.32, 0.32, 0.01)),
+        box_part("top", (0, 0, 0.155), (0.32, 0.32, 0.01)),
+        box_part("x-", (-0.095, 0, 0), (0.01, 0.32, 0.30)),
+        box_part("x+", (0.095, 0, 0), (0.01, 0.32, 0.30)),
+        box_part("y-", (0, -0.095, 0), (0.32, 0.01, 0.30)),
+        box_part("y+", (0, 0.095, 0), (0.32, 0.01, 0.30))])
+    sp, sn = pictures._samples(cabinet, 0.01)
+    qp, qn = pictures._samples(parts_mesh([box_part("box", (0, 0, 0), (0.1, 0.1, 0.1))]), 0.004)
+    img = pictures.closeup(sp, sn, qp, qn, np.eye(4), pictures.VALID)
+    seen = _green(img)
+    assert seen > 500                                     # the box is seen
+    r, g, b = img.astype(int).transpose(2, 0, 1)
+    grey = (np.abs(r - b) < 25) & (np.abs(g - b) < 25) & (r < 200)
+    assert grey.sum() > 3 * seen                          # and the cabinet round it
+    # without leaving out what hides it, a sliver of the box would show
+    hidden = pictures.closeup(sp, sn, qp, qn, np.eye(4), pictures.VALID, touch=np.inf)
+    assert _green(hidden) < seen / 5
