@@ -273,6 +273,23 @@ def test_the_tuning_chooses_the_placement_tests_whose_top_5_are_valid(tmp_path):
     md = (tmp_path / "tuning" / "tuning.md").read_text()
     assert "| 0.05 | off | off | 0.500 | 60.0 | 5/5 |" in md and "| 0.20 | off | off" in md
 
+    # the shipped placement tests are tried however low their F1, and marked
+    from interaction_tensor.evaluation.tuning import _contact_column
+    from interaction_tensor.examples.interactions import ACCEPTANCE
+
+    acc = ACCEPTANCE["placing"]
+    mode, d, _, angle = acc["contact"]
+    feats[_contact_column(mode, d, angle)] = np.ones(n)
+    shipped = {**option(acc["clearance_limit"], 0.1), "interior_limit": acc["interior_limit"],
+               "contact": list(acc["contact"])}
+    res.curves = {"placing": [option(0.2, 0.8), option(0.05, 0.6), shipped]}
+    choose_by_tops(res, [run], Verdicts(), TuneSettings(top_candidates=1), lambda _s: None)
+    rows = res.top_objective["placing"]
+    assert [(r["f1"], r["shipped"]) for r in rows] == [(0.8, False), (0.1, True)]
+    assert res.chosen["placing"]["top_valid"] == 5          # the shipped tests' top 5
+    write(res, tmp_path / "tuning")
+    assert "(shipped) |" in (tmp_path / "tuning" / "tuning.md").read_text()
+
 
 @pytest.fixture
 def corner_files(tmp_path):

@@ -420,14 +420,31 @@ class _TopJudge:
         return self.cache[key]
 
 
+def _same_tests(row: dict, acceptance: dict | None) -> bool:
+    """Whether a curve row has the placement tests of an acceptance (ACCEPTANCE's form)."""
+    return acceptance is not None and (
+        np.isclose(row["limit"], acceptance["clearance_limit"])
+        and np.isclose(row["interior_limit"], acceptance["interior_limit"])
+        and row["contact"][0] == acceptance["contact"][0]
+        and (row["contact"][0] == "off"
+             or np.allclose(row["contact"][1:], acceptance["contact"][1:])))
+
+
 def choose_by_tops(res: TuneResult, runs: list, verdicts: _TopJudge, st: TuneSettings,
                    log) -> None:
     """Re-choose each affordance's placement tests by Table 1's measure (module docstring,
     step 4): ``res.chosen[aff]`` becomes the candidate of most valid top poses, with its
     top-5 counts; ``res.top_objective[aff]`` lists every candidate's."""
+    from ..examples.interactions import ACCEPTANCE
+
     for aff, ch in list(res.chosen.items()):
-        cands = sorted(res.curves.get(aff, []), key=lambda r: (r["f1"], _strictness(r)),
+        curves = res.curves.get(aff, [])
+        cands = sorted(curves, key=lambda r: (r["f1"], _strictness(r)),
                        reverse=True)[:st.top_candidates]
+        # the shipped placement tests are always tried, so that a change is measured
+        # against them (the threshold plays no part in the top k)
+        shipped = [r for r in curves if _same_tests(r, ACCEPTANCE.get(aff))]
+        cands += [r for r in shipped if not any(r is c for c in cands)]
         rs = [r for r in runs if r.affordance == aff]
         table = []
         for c in cands:
@@ -440,7 +457,8 @@ def choose_by_tops(res: TuneResult, runs: list, verdicts: _TopJudge, st: TuneSet
                     valid += verdicts.valid(r, i)[0]
                     judged += 1
             table.append({**c, "top_valid": valid, "top_judged": judged,
-                          "top_precision": valid / judged if judged else float("nan")})
+                          "top_precision": valid / judged if judged else float("nan"),
+                          "shipped": any(c is r for r in shipped)})
             log(f"{aff:>8} limit {c['limit']:.2f} interior {c['interior_limit']:.2f} "
                 f"contact {c['contact']}: top {valid}/{judged} (F1 {c['f1']:.3f})")
         if not table:
@@ -617,8 +635,9 @@ def write(res: TuneResult, out_dir) -> None:
                          f"{o['runs_with_a_valid_accepted']}/{ch['runs_with_sites']} |")
         for aff, table in res.top_objective.items():
             by = res.chosen[aff].get("by_f1", {})
-            lines += ["", f"{aff}: the {len(table)} placement tests of largest F1, by their "
-                          "validation top 5 judged valid (ranked as the evaluation ranks); "
+            lines += ["", f"{aff}: the placement tests of largest F1 and the shipped ones "
+                          f"({len(table)}), by their validation top 5 judged valid (ranked "
+                          "as the evaluation ranks); "
                           f"largest F1 alone chose clearance {by.get('clearance_limit')}, "
                           f"interior {by.get('interior_limit')}, contact {by.get('contact')}, "
                           f"S_aff {by.get('threshold')}:", "",
@@ -629,8 +648,10 @@ def write(res: TuneResult, out_dir) -> None:
                 contact = "off" if mode == "off" else (
                     f"{mode}, {100 * d:g} cm, {100 * f:g} %" + ("" if a >= 90 else f", {a:g} deg"))
                 inner = "off" if r["interior_limit"] >= 1 else f"{r['interior_limit']:.2f}"
-                lines.append(f"| {r['limit']:.2f} | {inner} | {contact} | {r['threshold']:.3f} | "
-                             f"{_pct(r['f1'])} | {r['top_valid']}/{r['top_judged']} |")
+                lines.append(f"| {r['limit']:.2f} | {inner} | {contact}"
+                             f"{' (shipped)' if r.get('shipped') else ''} | "
+                             f"{r['threshold']:.3f} | {_pct(r['f1'])} | "
+                             f"{r['top_valid']}/{r['top_judged']} |")
         lines += ["", "Top-5 poses judged valid per (scene, example), under the chosen "
                       "acceptance:", ""]
         for r in res.runs:
