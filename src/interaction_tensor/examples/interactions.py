@@ -397,8 +397,8 @@ ACCEPTANCE: dict = {
     "placing": dict(threshold=0.03, clearance_limit=0.05, interior_limit=0.02,
                     contact=("main", 0.02, 0.9, 90.0),            # 99.2 %, 95.0 %
                     collision=[(0.01, None)], through=False),     # 30/76 invalid rejected
-    "sitting": dict(threshold=0.02, clearance_limit=0.10, interior_limit=1.0,
-                    contact=("main", 0.25, 0.25, 30.0),           # 83.9 %, 88.2 % (**)
+    "sitting": dict(threshold=0.11, clearance_limit=0.10, interior_limit=0.02,
+                    contact=("main", 0.10, 0.75, 90.0),           # 91.5 %, 78.1 % (***)
                     collision=[(0.05, None), (0.01, 0.0)],        # 58/108: the whole body
                     through=False, below_ground=0.05,             # 5 cm, above the seat 1 cm;
                     feet_reach=0.25),                             # ground 62, feet 95/108
@@ -422,6 +422,12 @@ ACCEPTANCE: dict = {
 #     is held low by background pairs of large weight (at the sites a valid hang is accepted
 #     in 8 of the 12 runs that have one); the top 5 of the validation runs are valid in 29/32
 #     seated people, 48/50 hangs and 18/25 riders (docs/results/tuning-2026-11-26/tuning.md)
+# (***) sitting tuned again on 2026-11-26 with Table 1's objective (the validation top 5,
+#     ranked as the evaluation ranks, collision budget and all): its placement tests tie
+#     with the ones shipped before (28/35 valid top poses each) and decide the validation
+#     pairs better (F1 84.3 against 74.6), so they replace them; hanging's and riding's
+#     shipped tests stay (53/70 and 18/35, the best of their candidates;
+#     docs/results/tuning-top2-2026-11-26/tuning.md)
 
 
 def acceptance(affordance: str) -> dict:
