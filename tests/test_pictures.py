@@ -35,3 +35,22 @@ def test_an_object_shut_in_a_cabinet_is_drawn_in_front_of_its_doors():
     # without leaving out what hides it, a sliver of the box would show
     hidden = pictures.closeup(sp, sn, qp, qn, np.eye(4), pictures.VALID, touch=np.inf)
     assert _green(hidden) < seen / 5
+
+
+def test_canvas_visibility_is_the_depth_test_over_each_3x3_window():
+    from interaction_tensor.viz.raster import Canvas, frame_points
+
+    rng = np.random.default_rng(0)
+    pts, q = rng.uniform(-1, 1, (5000, 3)), rng.uniform(-1.2, 1.2, (800, 3))
+    for az in (0, 45, 200):
+        cv = Canvas(frame_points(pts, az, 20, 160, 120), supersample=1)
+        cv.points(pts, (0, 0, 0), size=0.03, lit=False)
+        got = cv.visible(q, 0.02)
+        px, py, z = cv.cam.project(q)
+        ix, iy = np.rint(px).astype(int), np.rint(py).astype(int)
+        inside = (ix >= 1) & (ix < cv.w - 1) & (iy >= 1) & (iy < cv.h - 1) & (z > cv.cam.near)
+        d = cv.depth.reshape(cv.h, cv.w)
+        ref = np.zeros(len(q), bool)
+        for k in np.flatnonzero(inside):           # the reference: one window at a time
+            ref[k] = z[k] <= d[iy[k] - 1:iy[k] + 2, ix[k] - 1:ix[k] + 2].max() + 0.02
+        assert (got == ref).all() and 0 < got.sum() < len(q)
