@@ -260,9 +260,10 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
                 threshold=1e-9, clearance_max_violations=1.0, contact=False, interior=False,
                 ground=False, feet=False, straddle=False, mount=False, through=False, top_k=0,
                 seed=st.seed, neighbour_cache=True,
-                # shared by the judged sample and every candidate's ranking, each of which
-                # has detection's allowance of its own (RankingCheck)
-                collision_max_tests=ranking_budget(st) * (st.top_candidates + 2)),
+                # shared by the rankings (the top candidates, the shipped tests, the
+                # chosen ones), each with detection's allowance of its own (RankingCheck),
+                # and the judged sample (far fewer pairs than one allowance)
+                collision_max_tests=ranking_budget(st) * (st.top_candidates + 3)),
                 test_indices=test)
             feats = _features(det, tensor, scene, grid)
             is_near = near[det.pair_point]
