@@ -178,6 +178,8 @@ class _FakeCheck:
     """A CollisionCheck stand-in: ``free`` answers from a table and records what it was
     asked."""
 
+    on, exhausted = True, False
+
     def __init__(self, free):
         self.table, self.asked = free, []
 

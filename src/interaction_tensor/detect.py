@@ -676,6 +676,44 @@ def full_scores(det: Detection, idx: np.ndarray):
     return scores, outcome == PLACED
 
 
+def ranked_with_check(pos, key, full, ok, crossed, have, check, k: int, radius: float) -> list:
+    """The top ``k`` of pairs ``have`` by ``key``, ``radius`` apart, asking ``check`` (a
+    :class:`CollisionCheck` or a view of one) about each pair that would enter: ``key`` is
+    2 + ``full`` for a pair that passed the placement tests (``ok``), ``full`` for the others,
+    by pair index. A pair that crosses the scene is re-keyed below every other
+    (``full`` - 2, ``crossed`` set); one that passed the placement tests but could not be
+    tested (the tests are spent) ranks with those that failed them (``ok`` cleared), and once
+    the tests are spent so do all such untested pairs; the top is then taken again until
+    nothing moves. ``key``, ``ok`` and ``crossed`` are updated in place. Returns pair
+    indices, best first (:func:`rank_pairs`, and the tuning's ranking of the same pairs)."""
+    from .predictions import top_k
+
+    demoted = []                              # pairs whose key one pass of top_k lowered
+
+    def collision_free(j):
+        i = have[j]
+        if crossed[i]:
+            return True
+        free = check.free(i)
+        if free or (free is None and not ok[i]):
+            return True
+        ok[i], key[i] = False, full[i] - (2.0 if free is False else 0.0)
+        crossed[i] = free is False
+        demoted.append(i)
+        return False
+
+    while True:
+        demoted.clear()
+        out = [int(have[i]) for i in top_k(pos[have], key[have], k, radius,
+                                           accept=collision_free if check.on else None)]
+        if check.exhausted:                   # untested pairs cannot be confirmed
+            lost = have[ok[have] & (check.state[have] < 0)]
+            ok[lost], key[lost] = False, full[lost]
+            demoted.extend(lost)
+        if not demoted:
+            return out
+
+
 def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block: int = 2048,
                max_evaluations: int = 50_000):
     """The ``k`` best (or worst) pairs of a detection by full score, ``radius`` apart.
@@ -718,33 +756,9 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     check = None if worst else collision_check(det)
     have = np.zeros(0, np.int64)
     crossed = np.zeros(n, bool)               # pairs already ranked below every other
-    demoted = []                              # pairs whose key one pass of top_k lowered
-
-    def collision_free(j):
-        i = have[j]
-        if crossed[i]:
-            return True
-        free = check.free(i)
-        if free or (free is None and not okv[i]):
-            return True
-        # a pair that crosses the scene ranks below every other; one that passed the other
-        # tests but could not be tested (the tests are spent) ranks with those that failed
-        okv[i], key[i] = False, full[i] - (2.0 if free is False else 0.0)
-        crossed[i] = free is False
-        demoted.append(i)
-        return False
 
     def ranked():
-        while True:
-            demoted.clear()
-            out = [int(have[i]) for i in top_k(pos[have], key[have], k, radius,
-                                               accept=collision_free if check.on else None)]
-            if check.exhausted:               # untested pairs cannot be confirmed
-                lost = have[okv[have] & (check.state[have] < 0)]
-                okv[lost], key[lost] = False, full[lost]
-                demoted.extend(lost)
-            if not demoted:
-                return out
+        return ranked_with_check(pos, key, full, okv, crossed, have, check, k, radius)
 
     cursor = 0
     picks = []

@@ -318,39 +318,17 @@ def table_top(position, score, placed, k: int, radius: float, check=None):
     ``radius`` apart; then the other pairs by score, with them the placed pairs that could
     not be tested (the check answers None: its tests are spent); last those that cross the
     scene. Returns pair indices, best first."""
+    from ..detect import ranked_with_check
     from ..predictions import top_k
 
     score = np.asarray(score, float)
     position = np.asarray(position, float)
     ok = np.asarray(placed, bool).copy()
-    # groups 2 (placed), 1 (the others), 0 (crossing the scene), a score in [0, 1] within
-    key = score + np.where(ok, 20.0, 10.0)
+    key = np.where(ok, 2.0, 0.0) + score      # a score in [0, 1]: the groups do not mix
     if check is None:
         return np.asarray(top_k(position, key, k, radius), np.int64)
-    crossed = np.zeros(len(score), bool)
-    demoted = []
-
-    def accept(j):
-        if crossed[j]:
-            return True
-        free = check.free(int(j))
-        if free or (free is None and not ok[j]):
-            return True
-        # crossing: below every other pair; placed but untested: with the failed ones
-        ok[j], crossed[j] = False, free is False
-        key[j] = score[j] + (0.0 if free is False else 10.0)
-        demoted.append(j)
-        return False
-
-    while True:
-        demoted.clear()
-        got = top_k(position, key, k, radius, accept=accept)
-        if getattr(check, "exhausted", False):   # untested pairs cannot be confirmed
-            lost = np.flatnonzero(ok & (np.asarray(check.state) < 0))
-            ok[lost], key[lost] = False, score[lost] + 10.0
-            demoted.extend(lost)
-        if not demoted:
-            return np.asarray(got, np.int64)
+    return np.asarray(ranked_with_check(position, key, score, ok, np.zeros(len(score), bool),
+                                        np.arange(len(score)), check, k, radius), np.int64)
 
 
 class RankingCheck:
@@ -365,6 +343,7 @@ class RankingCheck:
         self.asked = np.zeros(len(check.state), bool)
         self.n_asked = 0
         self.exhausted = False
+        self.on = True
 
     def free(self, i: int):
         if not self.asked[i]:
