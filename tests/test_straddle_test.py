@@ -2,10 +2,10 @@
 the descriptor's ``straddle`` and ``mount_height``).
 
 A rider needs the support to go on between the legs ahead of the seat and room for a leg on
-each side, and a seat within reach from the ground. These tests check the column search
-against a brute-force reference, the rider it must keep (astride a narrow bench, facing
-along it) and the ones it must reject (across the bench, on a bed's wide top, on a tall
-partition's top), the riding acceptance it ships with, and the settings' file round trip.
+each side, and a seat within reach from the ground. These tests check the box test (the
+samples in boxes fixed to the rider) against a brute-force reference, the rider it must keep
+(astride a narrow bench, facing along it) and the ones it must reject (across the bench, on
+a bed's wide top, on a tall partition's top), the riding acceptance it ships with, and the settings' file round trip.
 """
 
 from __future__ import annotations
@@ -17,12 +17,11 @@ from hypothesis import strategies as st
 
 import interaction_tensor as it
 from interaction_tensor.clearance import (FAILS_MOUNT, FAILS_STRADDLE, PLACED, above_ground,
-                                          box_lattice, check_placements, straddle_passes,
-                                          straddle_passes_poses)
+                                          box_occupied, check_placements, straddle_passes,
+                                          straddle_passes_at, straddle_passes_poses)
 from interaction_tensor.errors import InputError
 from interaction_tensor.examples import interactions
 from interaction_tensor.examples.procedural import box_part, parts_mesh
-from interaction_tensor.scene import ColumnIndex
 
 from conftest import descriptor_with_header
 
@@ -47,39 +46,64 @@ def room():
     return it.prepare_scene(parts_mesh(parts), 0.01, seed=0)
 
 
-def _occupied_reference(points, xy, low, high, cell=0.02):
-    """Brute force: any sample between low and high in the columns holding the points."""
-    cols = np.floor(points[:, :2] / cell).astype(np.int64)
-    out = np.zeros(len(low), bool)
-    for i in range(len(low)):
-        c = np.floor(xy[i] / cell).astype(np.int64)
-        inside = (cols[:, None, :] == c[None]).all(axis=2).any(axis=1)
-        z = points[inside, 2]
-        out[i] = bool(((z >= low[i]) & (z <= high[i])).any())
+def _in_box_reference(points, rot, at, box):
+    """Brute force: for each placement, any sample whose coordinates in the placement's frame
+    (``rot.T @ (p - at)`` in x-y, the height above ``at``) lie in the box, edges included."""
+    (x0, x1), (y0, y1), (z0, z1) = box
+    out = np.zeros(len(at), bool)
+    for i in range(len(at)):
+        d = points - at[i]
+        uv = d[:, :2] @ rot[i]
+        out[i] = bool(((uv[:, 0] >= x0) & (uv[:, 0] <= x1) & (uv[:, 1] >= y0) & (uv[:, 1] <= y1)
+                       & (d[:, 2] >= z0) & (d[:, 2] <= z1)).any())
     return out
 
 
 @settings(max_examples=40, deadline=None)
-@given(st.integers(0, 2 ** 31 - 1), st.integers(1, 6))
-def test_the_column_search_without_margin_is_exact(seed, g):
+@given(st.integers(0, 2 ** 31 - 1), st.booleans())
+def test_the_box_test_is_exact_on_the_grid_and_with_the_tree(seed, eighths):
+    """Samples in a box turned about +Z (in eighths of a turn, as detection's orientations,
+    or at any angle) and moved: the Numba kernel and the cKDTree reference answer as a brute
+    force does, also for samples just inside the box's faces and just outside them."""
     rng = np.random.default_rng(seed)
-    points = rng.uniform([-0.2, -0.2, 0.0], [0.2, 0.2, 0.5], (300, 3))
-    xy = rng.uniform(-0.25, 0.25, (40, g, 2))
-    low = rng.uniform(-0.1, 0.5, 40)
-    high = low + rng.uniform(0.0, 0.3, 40)
-    index = ColumnIndex(points)
-    got = index.highest_under(xy, high, neighbours=False) >= low
-    np.testing.assert_array_equal(got, _occupied_reference(points, xy, low, high))
+    points = rng.uniform([-0.3, -0.3, 0.0], [0.3, 0.3, 0.5], (400, 3))
+    at = rng.uniform([-0.3, -0.3, 0.0], [0.3, 0.3, 0.5], (60, 3))
+    angle = (rng.integers(0, 8, len(at)) * np.pi / 4 if eighths
+             else rng.uniform(0, 2 * np.pi, len(at)))
+    c, s = np.cos(angle), np.sin(angle)
+    rot = np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], 1)
+    lo = rng.uniform(-0.2, 0.1, 3)
+    box = tuple((float(a), float(a + w)) for a, w in zip(lo, rng.uniform(0.01, 0.2, 3)))
+    # samples 1 micrometre inside a face of the first placements' boxes and 2 mm outside it
+    # (exactly on the face, rounding decides)
+    faces = []
+    for i in range(10):
+        u = rng.uniform(box[0][0], box[0][1])
+        z = rng.uniform(box[2][0], box[2][1])
+        for v in (box[1][1] - 1e-6, box[1][1] + 0.002):
+            faces.append(at[i] + np.r_[rot[i] @ [u, v], z])
+    points = np.r_[points, faces]
     scene = it.Scene(points, np.tile([0.0, 0.0, 1.0], (len(points), 1)), 0.01)
-    np.testing.assert_array_equal(scene.occupied(xy, low, high), got)
+    want = _in_box_reference(points, rot, at, box)
+    np.testing.assert_array_equal(box_occupied(rot, at, box, scene), want)
+    np.testing.assert_array_equal(box_occupied(rot, at, box, scene, scene.grid()), want)
 
 
-def test_a_box_lattice_covers_the_footprint_at_the_column_size():
-    lat = box_lattice(((-0.10, 0.20), (0.16, 0.40), (0.0, 1.0)))
-    assert lat[:, 0].min() == -0.10 and lat[:, 0].max() == 0.20
-    assert lat[:, 1].min() == 0.16 and lat[:, 1].max() == 0.40
-    assert np.diff(np.unique(lat[:, 0])).max() <= 0.02 + 1e-12
-    assert np.diff(np.unique(lat[:, 1])).max() <= 0.02 + 1e-12
+def test_samples_just_beside_the_astride_box_are_not_between_the_legs(riding):
+    """A rail 5 mm beside the astride box's side, under the seat and ahead of it: not astride
+    (office-desk5's rider #4 had samples 6-16 mm beside the box; the former test, the 2 cm
+    columns holding a lattice over the box, counted this rail). Moved 1 cm over, into the
+    box, it is astride."""
+    (x0, x1), (y0, y1), (z0, z1) = riding.straddle["astride"]
+    xs = np.arange(x0 - 0.1, x1 + 0.1, 0.005)
+    zs = np.arange(z0, z1, 0.01)
+    for y, want in ((y1 + 0.005, False), (y1 - 0.005, True)):
+        rail = np.stack(np.meshgrid(xs, [y], zs, indexing="ij"), -1).reshape(-1, 3)
+        scene = it.Scene(rail, np.tile([0.0, 0.0, 1.0], (len(rail), 1)), 0.005)
+        for grid in (None, scene.grid()):
+            got = straddle_passes_at(np.eye(2)[None], np.zeros((1, 3)),
+                                     {"astride": riding.straddle["astride"]}, scene, grid)
+            assert got.tolist() == [want]
 
 
 def test_a_rider_astride_a_bench_passes_and_across_it_or_on_a_bed_does_not(riding, room):

@@ -60,9 +60,6 @@ FAILS_FEET = 6
 #: where a leg goes on either side of it: the descriptor's ``straddle`` boxes
 #: (:func:`straddle_passes`; riding).
 FAILS_STRADDLE = 7
-#: Spacing (m) of the lattice that stands for a straddle box: the columns of the scene's
-#: column index (2 cm) that hold one of its points are the box's footprint.
-STRADDLE_LATTICE = 0.02
 #: A placement whose reference point (a rider's seat) is more than the descriptor's
 #: ``mount_height`` above the scene's ground (:func:`above_ground`; riding).
 FAILS_MOUNT = 8
@@ -334,23 +331,55 @@ def feet_gaps_poses(poses, tensor, scene) -> np.ndarray:
     return feet_gaps_at(feet, scene, ground)
 
 
-def box_lattice(box, spacing: float = STRADDLE_LATTICE) -> np.ndarray:
-    """(L, 2) a lattice over a box's footprint ``((x0, x1), (y0, y1), ...)`` at most
-    ``spacing`` apart, edges included."""
-    (x0, x1), (y0, y1) = box[0], box[1]
-    xs = np.linspace(x0, x1, int(np.ceil((x1 - x0) / spacing)) + 1)
-    ys = np.linspace(y0, y1, int(np.ceil((y1 - y0) / spacing)) + 1)
-    return np.stack(np.meshgrid(xs, ys, indexing="ij"), axis=-1).reshape(-1, 2)
+def _box_reference(rot, at, box, scene) -> np.ndarray:
+    """(P,) whether a scene sample lies in each placement's box (:func:`box_occupied`'s test
+    with the scene's cKDTree: the samples within the box's half-diagonal of its posed centre,
+    then the exact test; the reference of the Numba kernel ``_numba_clearance.box_hits``)."""
+    box = np.asarray(box, float)
+    mid = box.mean(axis=1)
+    reach = float(np.linalg.norm(box[:, 1] - box[:, 0])) / 2 + 1e-9
+    hit = np.zeros(len(at), bool)
+    for s in range(0, len(at), THROUGH_CHUNK):
+        r, a = rot[s:s + THROUGH_CHUNK], at[s:s + THROUGH_CHUNK]
+        centres = a + np.c_[np.einsum("pij,j->pi", r, mid[:2]), np.full(len(a), mid[2])]
+        groups = scene.tree.query_ball_point(centres, reach)
+        sizes = np.fromiter((len(g) for g in groups), np.int64, len(groups))
+        if sizes.sum() == 0:
+            continue
+        idx = np.concatenate([np.asarray(g, np.int64) for g in groups])
+        owner = np.repeat(np.arange(len(a)), sizes)
+        d = scene.points[idx] - a[owner]
+        uv = np.einsum("pji,pj->pi", r[owner], d[:, :2])          # rot.T @ (p - at)
+        inside = ((uv[:, 0] >= box[0, 0]) & (uv[:, 0] <= box[0, 1]) & (uv[:, 1] >= box[1, 0])
+                  & (uv[:, 1] <= box[1, 1]) & (d[:, 2] >= box[2, 0]) & (d[:, 2] <= box[2, 1]))
+        hit[s + owner[inside]] = True
+    return hit
 
 
-def straddle_passes_at(rot: np.ndarray, at: np.ndarray, straddle: dict, scene) -> np.ndarray:
+def box_occupied(rot, at, box, scene, grid=None) -> np.ndarray:
+    """(P,) whether a scene sample lies in a box ``((x0, x1), (y0, y1), (z0, z1))`` fixed to
+    placements: relative to ``at`` (P, 3) and turned about +Z by ``rot`` (P, 2, 2), edges
+    included (the judge's astride and legroom columns). Exact: on the Numba grid when one
+    is given, else with the scene's cKDTree (the reference; the same test)."""
+    rot = np.asarray(rot, float).reshape(-1, 2, 2)
+    at = np.asarray(at, float).reshape(-1, 3)
+    if grid is None:
+        return _box_reference(rot, at, box, scene)
+    from . import _numba_clearance
+
+    return _numba_clearance.boxes(at, rot, np.asarray(box, float), grid)
+
+
+def straddle_passes_at(rot: np.ndarray, at: np.ndarray, straddle: dict, scene,
+                       grid=None) -> np.ndarray:
     """(P,) whether placements pass the straddle test: a scene sample in the ``astride`` box
     and none in a ``legroom`` box (:attr:`~.descriptor.InteractionTensor.straddle`; boxes
     relative to the reference point, training frame), the placement turning the boxes by
     ``rot`` (P, 2, 2) about +Z and moving them to ``at`` (P, 3), the posed reference
-    point. A box is the 2 cm columns holding a point of its :func:`box_lattice` between its
-    heights (:meth:`~.scene.Scene.occupied`)."""
+    point. The samples in a box themselves, as the judge counts them
+    (:func:`box_occupied`)."""
     at = np.asarray(at, float).reshape(-1, 3)
+    rot = np.asarray(rot, float).reshape(-1, 2, 2)
     ok = np.ones(len(at), bool)
     boxes = ([(straddle["astride"], True)] if straddle.get("astride") is not None else []) + \
         [(b, False) for b in straddle.get("legroom", ())]
@@ -358,13 +387,13 @@ def straddle_passes_at(rot: np.ndarray, at: np.ndarray, straddle: dict, scene) -
         todo = np.flatnonzero(ok)
         if len(todo) == 0:
             break
-        xy = np.einsum("pij,lj->pli", rot[todo], box_lattice(box)) + at[todo, None, :2]
-        hit = scene.occupied(xy, at[todo, 2] + box[2][0], at[todo, 2] + box[2][1])
+        hit = box_occupied(rot[todo], at[todo], box, scene, grid)
         ok[todo[hit != wanted]] = False
     return ok
 
 
-def straddle_passes(points, orient, tensor, scene, n_orientations: int) -> np.ndarray:
+def straddle_passes(points, orient, tensor, scene, n_orientations: int,
+                    grid=None) -> np.ndarray:
     """(P,) :func:`straddle_passes_at` of placements (test points (P, 3) at the reference
     point, orientation indices (P,)); all True for a descriptor without the test."""
     points = np.asarray(points, float).reshape(-1, 3)
@@ -372,17 +401,17 @@ def straddle_passes(points, orient, tensor, scene, n_orientations: int) -> np.nd
         return np.ones(len(points), bool)
     rot = rotation_z(2 * np.pi * np.arange(n_orientations) / n_orientations)[:, :2, :2]
     return straddle_passes_at(rot[np.asarray(orient, np.int64)], points, tensor.straddle,
-                              scene)
+                              scene, grid)
 
 
-def straddle_passes_poses(poses, tensor, scene) -> np.ndarray:
+def straddle_passes_poses(poses, tensor, scene, grid=None) -> np.ndarray:
     """(P,) :func:`straddle_passes_at` of placements given as 4x4 poses (P, 4, 4) of the
     training-frame query (a turn about +Z and a move: the judge's labelled poses)."""
     poses = np.asarray(poses, float).reshape(-1, 4, 4)
     if tensor.straddle is None or len(poses) == 0:
         return np.ones(len(poses), bool)
     at = np.einsum("pij,j->pi", poses[:, :3, :3], tensor.reference_point) + poses[:, :3, 3]
-    return straddle_passes_at(poses[:, :2, :2], at, tensor.straddle, scene)
+    return straddle_passes_at(poses[:, :2, :2], at, tensor.straddle, scene, grid)
 
 
 def through_polygon(section) -> tuple:
@@ -522,7 +551,7 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
         outcome[todo[gaps > tensor.feet_reach]] = FAILS_FEET
     todo = np.flatnonzero(outcome == PLACED)
     if settings.straddle and tensor.straddle is not None and len(todo):
-        ok = straddle_passes(points[todo], orient[todo], tensor, scene, n_o)
+        ok = straddle_passes(points[todo], orient[todo], tensor, scene, n_o, grid)
         outcome[todo[~ok]] = FAILS_STRADDLE
     todo = np.flatnonzero(outcome == PLACED)
     if settings.mount and tensor.mount_height is not None and len(todo):

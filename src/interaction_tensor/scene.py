@@ -53,7 +53,6 @@ class Scene:
     _collider: object = field(default=None, repr=False)
     _ground: object = field(default=None, repr=False)
     _columns: object = field(default=None, repr=False)
-    _all_columns: object = field(default=None, repr=False)
 
     @property
     def tree(self) -> cKDTree:
@@ -95,15 +94,6 @@ class Scene:
             flat = np.abs(self.normals[:, 2]) >= np.cos(np.radians(STAND_ANGLE))
             self._columns = ColumnIndex(self.points[flat])
         return self._columns.highest_under(xy, limit)
-
-    def occupied(self, xy: np.ndarray, low: np.ndarray, high: np.ndarray) -> np.ndarray:
-        """(P,) whether any scene sample (of any normal) lies between ``low`` and ``high``
-        (P,) m high in the 2 cm columns that contain ``xy`` (P, G, 2) (no margin around them;
-        :class:`ColumnIndex` of every sample, built on first use): detection's straddle
-        test asks it of boxes fixed to the query."""
-        if self._all_columns is None:
-            self._all_columns = ColumnIndex(self.points)
-        return self._all_columns.highest_under(xy, high, neighbours=False) >= np.asarray(low)
 
     def __len__(self) -> int:
         return len(self.points)
@@ -177,24 +167,21 @@ class ColumnIndex:
         self.stride = len(self.z) + 1
         self.code = np.sort((ij[:, 0] * self.ny + ij[:, 1]) * self.stride + rank)
 
-    def highest_under(self, xy: np.ndarray, limit: np.ndarray, chunk: int = 4096,
-                      neighbours: bool = True) -> np.ndarray:
+    def highest_under(self, xy: np.ndarray, limit: np.ndarray, chunk: int = 4096) -> np.ndarray:
         """(P,) the highest sample at most ``limit`` (P,) high in the columns under ``xy``
-        (P, G, 2) and, with ``neighbours``, their 8 neighbours (a margin of at least one cell
-        around each point); -inf where there is none. Exact (tested against a brute-force
-        search)."""
+        (P, G, 2) and their 8 neighbours (a margin of at least one cell around each point);
+        -inf where there is none. Exact (tested against a brute-force search)."""
         xy = np.asarray(xy, float)
         limit = np.asarray(limit, float)
         p = len(limit)
         out = np.full(p, -np.inf)
         if p == 0 or xy.shape[1] == 0:
             return out
-        d = (np.array([(a, b) for a in (-1, 0, 1) for b in (-1, 0, 1)], np.int64) if neighbours
-             else np.zeros((1, 2), np.int64))
+        d = np.array([(a, b) for a in (-1, 0, 1) for b in (-1, 0, 1)], np.int64)
         chunk = max(1, chunk * 9 // len(d) // max(1, xy.shape[1] // 64))
         for s in range(0, p, chunk):
             c = np.floor(xy[s:s + chunk] / self.cell).astype(np.int64) - self.origin
-            c = (c[:, :, None, :] + d).reshape(len(c), -1, 2)           # (p, 9G or G, 2)
+            c = (c[:, :, None, :] + d).reshape(len(c), -1, 2)           # (p, 9G, 2)
             ok = (c[..., 0] >= 0) & (c[..., 1] >= 0) & (c[..., 1] < self.ny)
             key = c[..., 0] * self.ny + c[..., 1]
             # the largest height rank <= limit, then the last code at or below (key, rank)

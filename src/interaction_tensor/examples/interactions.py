@@ -404,11 +404,11 @@ ACCEPTANCE: dict = {
                     feet_reach=0.25),                             # ground 62, feet 95/108
     "hanging": dict(threshold=0.03, clearance_limit=0.10, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),             # 100 %, 4.3 % (**)
-                    collision=[(0.01, None)], through=True,       # 90/95, and with the
-                    below_ground=0.01),                           # ground test 95/95
+                    collision=[(0.01, None)], through=True,       # 90/105, with the
+                    below_ground=0.01),                           # ground test 95/105
     "filling": dict(threshold=0.575, clearance_limit=0.02, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),             # 100 %, 71.7 %
-                    collision=[(0.01, None)], through=True),      # 9/69 (support under it)
+                    collision=[(0.01, None)], through=True),      # 12/72 (support under it)
     "riding": dict(threshold=0.05, clearance_limit=0.20, interior_limit=1.0,
                    contact=("off", 0.02, 0.1, 90.0),              # 83.5 %, 54.0 % (**)
                    collision=[(0.01, 0.0)], through=False,        # 11/48: above the seat;
