@@ -115,6 +115,32 @@ def test_rank_pairs_finds_the_best_rejected_pairs_when_nothing_is_accepted(bowl)
     assert np.allclose(best_s, full[exact])
 
 
+def test_rank_pairs_reaches_placed_pairs_below_many_better_scored_failures(bowl):
+    """The accepted pairs of the highest scores fail their placement tests (as a hanger's
+    hooks through furniture do): the pairs that pass rank first however few evaluations
+    are allowed, since an accepted pair's key is known without scoring it again (scored
+    in score order, 64 evaluations reached only the failures)."""
+    from interaction_tensor.clearance import FAILS_CLEARANCE
+    from interaction_tensor.examples import demo
+
+    room = it.prepare_scene(demo.build().scene, 0.02, seed=0)
+    det = it.detect(room, bowl, it.DetectSettings(sample_fraction=0.02, threshold=0.5,
+                                                  collision=False))
+    acc = np.flatnonzero(det.pairs.accepted)
+    failing = acc[np.argsort(-det.pairs.score[acc], kind="stable")][:len(acc) // 2]
+    assert len(failing) > 200
+    det.placement[failing] = FAILS_CLEARANCE
+    det.pairs.accepted[failing] = False
+    n = len(det.pairs.score)
+    full, ok = full_scores(det, np.arange(n))
+    pos = room.points[det.pair_point]
+    exact = top_k(pos, np.where(ok, 2.0, 0.0) + full, 5, 0.15)
+    assert ok[exact].all() and not np.isin(exact, failing).any()
+    best, best_s, best_ok = rank_pairs(det, 5, 0.15, block=64, max_evaluations=64)
+    assert best.tolist() == exact
+    assert best_ok.all() and np.allclose(best_s, full[exact])
+
+
 def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
     from interaction_tensor.evaluation.tuning import COLUMNS
 
