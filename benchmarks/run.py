@@ -422,10 +422,14 @@ def case_torch(scene_name: str, fraction: float) -> dict:
     # the torch path as it is, and the same run as the code before 2026-11-26 scored it
     # (pairs in the caller's order: blocks spread over the whole scene); with more tile
     # levels (the queries one level cannot prove asked again of larger tiles on the device
-    # instead of the CPU's cKDTree); $ITENSOR_BENCH_VARIANTS picks (default: torch, before)
-    variants = {"torch": {}, "two_levels": {"levels": 2},
+    # instead of the CPU's cKDTree); "cdist": the tiles searched with torch.cdist from a
+    # Python loop over them (the kernel before the Triton one, and the one without Triton);
+    # $ITENSOR_BENCH_VARIANTS picks (default: torch, before)
+    variants = {"torch": {}, "one_level": {"levels": 1, "coarsening": 4.0},
+                "two_levels": {"levels": 2, "coarsening": 4.0},
                 "three_levels": {"levels": 3, "coarsening": 2.0},
-                "before": {"spatial_order": False}}
+                "before": {"spatial_order": False}, "cdist": {"kernel": "cdist"},
+                "cdist_two_levels": {"kernel": "cdist", "levels": 2}}
     chosen = os.environ.get("ITENSOR_BENCH_VARIANTS", "torch,before").split(",")
     from interaction_tensor import torch_backend
     index_cls, scorer = torch_backend.TorchIndex, torch_backend.score_pairs_torch
@@ -435,8 +439,9 @@ def case_torch(scene_name: str, fraction: float) -> dict:
         opts = variants[name]
 
         def index(*a, _opts=opts, _name=name, **k):
-            made[_name] = index_cls(*a, levels=_opts.get("levels", 1),
-                                    coarsening=_opts.get("coarsening", 4.0), **k)
+            made[_name] = index_cls(*a, levels=_opts.get("levels"),
+                                    coarsening=_opts.get("coarsening"),
+                                    kernel=_opts.get("kernel", "auto"), **k)
             return made[_name]
 
         torch_backend.TorchIndex = index
@@ -452,6 +457,7 @@ def case_torch(scene_name: str, fraction: float) -> dict:
         out[name] = {"scoring_s": round(sc, 3),
                      "candidates_per_s": det.stats["candidates_after_normal_filter"] / sc,
                      "tree_queries": made[name].tree_queries,
+                     "kernel": made[name].kernel,
                      "identical_decisions": bool(np.array_equal(det.pairs.accepted,
                                                                 res["numba"].pairs.accepted)),
                      "identical_top5": _top5(det) == _top5(res["numba"])}
@@ -768,20 +774,21 @@ def markdown(results: dict) -> str:
 
 
 GPU_NOTES = """On the H200 the torch path decides exactly as the Numba path (every run above:
-identical decisions and top 5; the torch tests pass on CUDA), but it is slower than Numba on
-the same machine's CPUs (3-5x) and than Numba on this 2-core machine (5,422 candidates/s,
-measured 2026-11-25).
-Scoring the pairs in the order of their test points' tiles made it 1.69x faster (lease 1;
-1.34x in lease 2, where the tile loop no longer waits for the device at each tile; the two
-leases' machines differ, so lease 2's 9.4 s against lease 1's 12.2 s for the tile order is
-not a measured gain). The queries that a tile cannot prove within its margin (3.4M of 75M at
-3 %) go to the CPU's cKDTree; a second level of tiles four times as large on the device sends
-only 87k there, but its large tiles cost more than the tree calls saved, so one level stays
-the default. Not
-measured (a profile of this run failed): how the time splits between the Python loop over
-the tiles (thousands of small kernel launches per block of 2,048 pairs) and the dense
-distance matrices. The next step is one kernel per block (padded per-cell candidate lists or
-a Triton kernel) rather than a loop over tiles."""
+identical decisions and top 5; the torch tests pass on CUDA, with both kernels).
+**Lease 3 (the Triton kernel):** a level's tile search is one Triton kernel launch per block
+of queries (`_triton_nearest.py`: queries sorted by tile, 32 to a work item, each reading its
+tile's members 64 at a time and keeping the nearest, float64) instead of `torch.cdist` tile
+by tile from a Python loop: 2.7x the candidates/s at 3 % (3.78 s against 10.21 s, same
+lease). With the kernel cheap, the queries left to the CPU's cKDTree dominate: at 30 %, one
+level sent 34M there (32.5 s); a second level of tiles 4x as large on the device cut that
+to 886k (19.9 s), larger blocks (8,192 pairs: fewer launches) to 16.7 s, and three levels
+each twice the one before to 12.5 s (`benchmarks/torch_levels.py`, one process). The
+committed defaults (Triton on CUDA, 3 levels x2, 8,192 pairs per block) score kitchen5 at
+30 % in **12.1 s, 15,155 candidates/s: 1.2x Numba on the same machine's 16 cores** (14.6 s)
+and 2.8x Numba on this 2-core machine (5,422, 2026-11-25). Numba's own figure moved from
+44.6 s (the lease's first 30 % run) to 14.8 s and 14.6 s in its later runs: compare within
+a run. Without Triton (or off CUDA) the cdist loop stays, as before: 3-5x slower than Numba
+on the same machine (leases 1-2)."""
 
 
 #: RESULTS.md below this line is written by the other benchmarks' runs and kept as it is

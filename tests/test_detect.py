@@ -1,3 +1,5 @@
+import os
+
 import numpy as np
 import pytest
 
@@ -269,11 +271,30 @@ def _torch_devices():
     return ["cpu", pytest.param("cuda", marks=pytest.mark.skipif(not cuda, reason="no CUDA"))]
 
 
+def _triton_usable() -> bool:
+    """Triton imports, and runs: on a CUDA device, or on the CPU under its interpreter
+    (``TRITON_INTERPRET=1``, set before the tests start)."""
+    try:
+        import torch
+        import triton  # noqa: F401
+    except ImportError:
+        return False
+    return torch.cuda.is_available() or os.environ.get("TRITON_INTERPRET") == "1"
+
+
+KERNELS = ["cdist", pytest.param("triton", marks=pytest.mark.skipif(
+    not _triton_usable(), reason="no Triton, or neither CUDA nor TRITON_INTERPRET=1"))]
+
+
+@pytest.mark.parametrize("kernel", KERNELS)
 @pytest.mark.parametrize("device", _torch_devices())
 @pytest.mark.parametrize("criterion", ["paper", "gaussian"])
-def test_torch_backend_decides_like_the_cpu_paths(corner_tensor, scored_setup, criterion, device):
+def test_torch_backend_decides_like_the_cpu_paths(corner_tensor, scored_setup, criterion, device,
+                                                  kernel):
     torch = pytest.importorskip("torch")
     from interaction_tensor.torch_backend import TorchIndex, score_pairs_torch
+    if kernel == "triton" and device == "cpu" and os.environ.get("TRITON_INTERPRET") != "1":
+        pytest.skip("Triton on the CPU runs under TRITON_INTERPRET=1 only")
     scene, pp, po = scored_setup
     pp, po = pp[::3], po[::3]
     settings = it.DetectSettings(criterion=criterion)
@@ -282,7 +303,8 @@ def test_torch_backend_decides_like_the_cpu_paths(corner_tensor, scored_setup, c
     ref = score_pairs(scene.points[pp], po, table, scene, thr)
     assert 0 < ref.accepted.sum() < len(pp)
     # small tiles so that many queries fall back to the tree and tiles border each other
-    index = TorchIndex(scene, device, tile=0.15, margin=0.03)
+    index = TorchIndex(scene, device, tile=0.15, margin=0.03, kernel=kernel)
+    assert index.kernel == kernel
     for spatial in (True, False):      # blocks in tile order and in the caller's order
         got = score_pairs_torch(scene.points[pp], po, table, index, thr, pairs_per_block=500,
                                 spatial_order=spatial)
@@ -296,7 +318,7 @@ def test_torch_backend_decides_like_the_cpu_paths(corner_tensor, scored_setup, c
     d_ref = scene.tree.query(q)[0]
     asked = {}
     for levels in (1, 2):       # the coarser level proves on the device what the tree did
-        index = TorchIndex(scene, device, tile=0.15, margin=0.03, levels=levels)
+        index = TorchIndex(scene, device, tile=0.15, margin=0.03, levels=levels, kernel=kernel)
         nn = index.nearest(torch.as_tensor(q, device=device)).cpu().numpy()
         np.testing.assert_allclose(np.linalg.norm(scene.points[nn] - q, axis=1), d_ref,
                                    atol=1e-12)

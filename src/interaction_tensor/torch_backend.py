@@ -78,27 +78,42 @@ class TorchIndex:
         thousand points per grown tile on a surface scene)
     margin : how far (m) each first-level tile reaches out for points; None: a quarter of
         the tile
+    kernel : how a level finds each query's nearest member of its tile: ``"triton"`` (one
+        launch of a Triton kernel per block of queries, :mod:`._triton_nearest`; Triton
+        comes with PyTorch's CUDA builds; on the CPU only under ``TRITON_INTERPRET=1``, for
+        tests), ``"cdist"`` (``torch.cdist`` tile by tile from a Python loop: a few kernel
+        launches per tile), or ``"auto"``: Triton on a CUDA device when it imports, else
+        cdist
     levels : tile levels, each ``coarsening`` times the tile and margin of the one before:
         a query whose nearest point the first level cannot prove (farther than its room to
         the grown tile's outside) is asked again at the next, on the device; only what the
-        last level cannot prove goes to SciPy's cKDTree. Default 1: on an H200 (kitchen5,
-        placing-bowl, 3 %, 2026-11-26) a second level took 11.0 s against 9.4 s for one (it
-        sent 87k instead of 3.4M queries to the tree, but its large tiles cost more)
+        last level cannot prove goes to SciPy's cKDTree. Default (None): 3 levels each twice
+        the one before with the Triton kernel (an H200, kitchen5, placing-bowl, 30 %,
+        2026-11-26: 12.5 s, against 16.7 s for 2 levels x4 and 32.5 s for 1, which sent 34M
+        queries to the tree), 1 level with cdist (3 %: a second level took 11.0 s against
+        9.4 s for one; it sent 87k instead of 3.4M queries to the tree, but its large tiles
+        cost more)
+    coarsening : see ``levels``; None: 2 with Triton, 4 with cdist
     """
 
     def __init__(self, scene, device: str = "cuda", tile: float | None = None,
-                 margin: float | None = None, levels: int = 1, coarsening: float = 4.0):
+                 margin: float | None = None, levels: int | None = None,
+                 coarsening: float | None = None, kernel: str = "auto"):
         torch = import_torch()
         self.torch = torch
         self.scene = scene
         self.device = torch.device(device)
+        self.kernel = resolve_kernel(kernel, self.device)
+        triton = self.kernel == "triton"
+        levels = int(levels if levels is not None else 3 if triton else 1)
+        coarsening = float(coarsening if coarsening is not None else 2.0 if triton else 4.0)
         pts = scene.points
         tile = float(tile if tile is not None else max(16 * scene.spacing, 0.1))
         margin = float(margin if margin is not None else tile / 4)
         if levels < 1 or coarsening < 1:
             raise SettingsError("TorchIndex needs levels >= 1 and coarsening >= 1")
         self.levels = [_TileLevel(pts, tile * coarsening ** k, margin * coarsening ** k,
-                                  torch, self.device) for k in range(levels)]
+                                  torch, self.device, self.kernel) for k in range(levels)]
         f64 = torch.float64
         self.points = torch.as_tensor(pts, dtype=f64, device=self.device)
         self.normals = torch.as_tensor(scene.normals, dtype=f64, device=self.device)
@@ -127,12 +142,30 @@ class TorchIndex:
         return out
 
 
+def resolve_kernel(kernel: str, device) -> str:
+    """:class:`TorchIndex`'s ``kernel`` made concrete (``auto``: Triton on CUDA when it
+    imports); SettingsError for an unknown one or Triton asked for and missing."""
+    if kernel not in ("auto", "triton", "cdist"):
+        raise SettingsError(f"kernel {kernel!r} must be auto, triton or cdist")
+    if kernel == "cdist" or (kernel == "auto" and device.type != "cuda"):
+        return "cdist"
+    try:
+        from . import _triton_nearest  # noqa: F401
+    except ImportError:
+        if kernel == "triton":
+            raise SettingsError("kernel 'triton' needs Triton (it comes with PyTorch's CUDA "
+                                "builds: pip install triton)") from None
+        return "cdist"
+    return "triton"
+
+
 class _TileLevel:
     """One level of tiles: cubes of edge ``tile``, each keeping the scene points of the cube
     grown by ``margin`` (a point may belong to several grown tiles)."""
 
-    def __init__(self, pts: np.ndarray, tile: float, margin: float, torch, device):
-        self.torch, self.device = torch, device
+    def __init__(self, pts: np.ndarray, tile: float, margin: float, torch, device,
+                 kernel: str = "cdist"):
+        self.torch, self.device, self.kernel = torch, device, kernel
         self.lo = pts.min(axis=0)
         extent = np.ptp(pts, axis=0) + 1e-9
         # a wide scene gets larger tiles rather than a huge tile table
@@ -161,6 +194,12 @@ class _TileLevel:
         self._members = torch.as_tensor(self.members, device=device)
         self._lo = torch.as_tensor(self.lo, dtype=torch.float64, device=device)
         self._dims = torch.as_tensor(self.dims, device=device)
+        if kernel == "triton":
+            # the members' coordinates in tile order, one array per axis (the kernel reads
+            # a tile's members contiguously)
+            self._starts = torch.as_tensor(self.starts, dtype=torch.int64, device=device)
+            self._xyz = [torch.as_tensor(np.ascontiguousarray(pts[self.members, a]),
+                                         dtype=torch.float64, device=device) for a in range(3)]
 
     def _linear(self, t: np.ndarray) -> np.ndarray:
         return (t[:, 0] * self.dims[1] + t[:, 1]) * self.dims[2] + t[:, 2]
@@ -182,6 +221,14 @@ class _TileLevel:
         box_hi = box_lo + self.tile + 2 * self.margin
         room2 = torch.minimum(q - box_lo, box_hi - q).min(dim=1).values.clamp(min=0).square()
         order = torch.argsort(lin, stable=True)
+        if self.kernel == "triton":
+            from ._triton_nearest import nearest_in_tiles
+
+            pos, d2 = nearest_in_tiles(torch, q[order], lin[order], self._starts, *self._xyz)
+            nn = self._members[pos.clamp(min=0)]
+            # proven where the nearest member lies inside the grown tile's room
+            out[order] = torch.where((pos >= 0) & (d2 <= room2[order]), nn, out[order])
+            return out
         uniq, counts = torch.unique_consecutive(lin[order], return_counts=True)
         uniq = uniq.cpu().numpy()                       # one transfer per call
         bounds = np.r_[0, np.cumsum(counts.cpu().numpy())]
@@ -208,16 +255,21 @@ class _TileLevel:
 
 def score_pairs_torch(points: np.ndarray, orient: np.ndarray, table, index: TorchIndex,
                       threshold: float, vectors: str = "surface", early_exit: bool = True,
-                      pairs_per_block: int = 2048, spatial_order: bool = True) -> PairScores:
+                      pairs_per_block: int | None = None,
+                      spatial_order: bool = True) -> PairScores:
     """Score pairs like :func:`interaction_tensor.scoring.score_pairs`, on ``index.device``.
 
     Returns the same accepted flags, accepted scores and ``decided_at``; a rejected pair's
     score is its partial sum at the decision when ``early_exit`` (as on the CPU), its full
     score otherwise. ``comparisons`` counts every keypoint compared (all of them here).
     ``spatial_order`` scores the pairs in the order of their test points' tiles (the same
-    results, fewer tiles per block).
+    results, fewer tiles per block). ``pairs_per_block`` None: 8,192 with the Triton kernel
+    (one launch per block: larger blocks, fewer launches; 16.7 s against 20.0 s for 2,048 on
+    the H200 run above), 2,048 with cdist.
     """
     torch = index.torch
+    if pairs_per_block is None:
+        pairs_per_block = 8192 if index.kernel == "triton" else 2048
     dev, f64 = index.device, torch.float64
     n = table.n
     offsets = torch.as_tensor(table.offsets, dtype=f64, device=dev)
