@@ -13,10 +13,16 @@ from numba import njit, prange
 
 
 @njit(cache=True, inline="always")
+def _cells(lo, hi, o, cell, n):
+    """The cells (first, last) along one axis that meet [lo, hi]."""
+    return (max(int(math.floor((lo - o) / cell)), 0),
+            min(int(math.floor((hi - o) / cell)), n - 1))
+
+
+@njit(cache=True, inline="always")
 def _span(q, r, o, cell, n):
     """The cells (first, last) along one axis that meet [q - r, q + r]."""
-    return (max(int(math.floor((q - r - o) / cell)), 0),
-            min(int(math.floor((q + r - o) / cell)), n - 1))
+    return _cells(q - r, q + r, o, cell, n)
 
 
 @njit(cache=True, inline="always")
@@ -157,12 +163,9 @@ def box_hits(at, rot, box, pts, starts, origin, cell, dims, out):
             lo_y = min(lo_y, wy)
             hi_y = max(hi_y, wy)
         # the cells of the bounding box, widened by 1 nm against rounding at its edges
-        i0 = max(int(math.floor((ax + lo_x - 1e-9 - ox) / cell)), 0)
-        i1 = min(int(math.floor((ax + hi_x + 1e-9 - ox) / cell)), nx - 1)
-        j0 = max(int(math.floor((ay + lo_y - 1e-9 - oy) / cell)), 0)
-        j1 = min(int(math.floor((ay + hi_y + 1e-9 - oy) / cell)), ny - 1)
-        k0 = max(int(math.floor((az + z0 - 1e-9 - oz) / cell)), 0)
-        k1 = min(int(math.floor((az + z1 + 1e-9 - oz) / cell)), nz - 1)
+        i0, i1 = _cells(ax + lo_x - 1e-9, ax + hi_x + 1e-9, ox, cell, nx)
+        j0, j1 = _cells(ay + lo_y - 1e-9, ay + hi_y + 1e-9, oy, cell, ny)
+        k0, k1 = _cells(az + z0 - 1e-9, az + z1 + 1e-9, oz, cell, nz)
         found = False
         for a in range(i0, i1 + 1):
             if found:

@@ -331,6 +331,18 @@ def feet_gaps_poses(poses, tensor, scene) -> np.ndarray:
     return feet_gaps_at(feet, scene, ground)
 
 
+def _ball_members(scene, centres, reach):
+    """The scene samples within ``reach`` of each of ``centres`` (C, 3) as flat arrays
+    (sample indices, owning centre), or None where no centre has any (the cKDTree
+    references of the box and through tests)."""
+    groups = scene.tree.query_ball_point(centres, reach)
+    sizes = np.fromiter((len(g) for g in groups), np.int64, len(groups))
+    if sizes.sum() == 0:
+        return None
+    return (np.concatenate([np.asarray(g, np.int64) for g in groups]),
+            np.repeat(np.arange(len(centres)), sizes))
+
+
 def _box_reference(rot, at, box, scene) -> np.ndarray:
     """(P,) whether a scene sample lies in each placement's box (:func:`box_occupied`'s test
     with the scene's cKDTree: the samples within the box's half-diagonal of its posed centre,
@@ -342,12 +354,10 @@ def _box_reference(rot, at, box, scene) -> np.ndarray:
     for s in range(0, len(at), THROUGH_CHUNK):
         r, a = rot[s:s + THROUGH_CHUNK], at[s:s + THROUGH_CHUNK]
         centres = a + np.c_[np.einsum("pij,j->pi", r, mid[:2]), np.full(len(a), mid[2])]
-        groups = scene.tree.query_ball_point(centres, reach)
-        sizes = np.fromiter((len(g) for g in groups), np.int64, len(groups))
-        if sizes.sum() == 0:
+        found = _ball_members(scene, centres, reach)
+        if found is None:
             continue
-        idx = np.concatenate([np.asarray(g, np.int64) for g in groups])
-        owner = np.repeat(np.arange(len(a)), sizes)
+        idx, owner = found
         d = scene.points[idx] - a[owner]
         uv = np.einsum("pji,pj->pi", r[owner], d[:, :2])          # rot.T @ (p - at)
         inside = ((uv[:, 0] >= box[0, 0]) & (uv[:, 0] <= box[0, 1]) & (uv[:, 1] >= box[1, 0])
@@ -438,12 +448,10 @@ def _crossed_reference(centres, axes, ring, reach, slab, max_cos, scene) -> np.n
     edges = np.roll(ring, -1, axis=0) - ring
     for s in range(0, len(centres), THROUGH_CHUNK):
         c = centres[s:s + THROUGH_CHUNK]
-        groups = scene.tree.query_ball_point(c, reach)
-        sizes = np.fromiter((len(g) for g in groups), np.int64, len(groups))
-        if sizes.sum() == 0:
+        found = _ball_members(scene, c, reach)
+        if found is None:
             continue
-        idx = np.concatenate([np.asarray(g, np.int64) for g in groups])
-        owner = np.repeat(np.arange(len(c)), sizes)
+        idx, owner = found
         local = np.einsum("pij,pj->pi", axes[s:s + THROUGH_CHUNK][owner],
                           scene.points[idx] - c[owner])
         rel = local[:, None, :2] - ring[None]

@@ -752,11 +752,11 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     # tests: hanging-handbag in office-desk6 never reached 47,872 of its placed pairs)
     from .clearance import PLACED, UNTESTED
 
-    known = (np.zeros(n, bool) if det.placement is None
-             else done & (det.placement != UNTESTED))
-    full[known] = score[known]
-    if known.any():
+    known = np.zeros(n, bool)
+    if det.placement is not None:
+        known = done & (det.placement != UNTESTED)
         okv[known] = det.placement[known] == PLACED
+    full[known] = score[known]
     key[known] = -full[known] if worst else np.where(okv[known], 2.0, 0.0) + full[known]
     # optimistic key of a pair not scored yet: the key is (2 if it passes the placement
     # tests) + full score for the best, -full score for the worst. Pairs of equal bound are
