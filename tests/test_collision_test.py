@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 import interaction_tensor as it
 from interaction_tensor.clearance import FAILS_COLLISION
 from interaction_tensor.collision import Body, MeshCollider
+from interaction_tensor.collision import polygon as collision_polygon
 from interaction_tensor.detect import CollisionCheck, rank_pairs, suppression_radius
 from interaction_tensor.errors import InputError
 from interaction_tensor.examples import interactions
@@ -191,6 +192,33 @@ def test_a_hook_with_nothing_through_it_fails_and_one_on_its_rail_passes(hanging
     assert MeshCollider(*scene.mesh).collides(body, tensor.pose(scene.points[top[0]], 0.0))
 
 
+def test_a_hook_pushed_up_into_a_board_underside_has_nothing_through_it(hanging):
+    """A board whose underside reaches 2.75 mm into the top of the hook's opening (the wire in
+    the board, the hanger hanging free below: scans' wall cabinets and seat undersides) only
+    grazes the opening: neither the exact nor the sampled through test passes it, while the
+    rail still passes both. Without the section's top band, both passed it."""
+    from interaction_tensor.clearance import through_crossed_poses
+    from interaction_tensor.descriptor import through_section_of
+
+    ex, tensor = hanging
+    apex = float(ex.support_point[2])
+    board = parts_mesh([box_part("board", (0.0, 0.0, apex - 0.00275 + 0.015), (0.6, 0.4, 0.03))])
+    graze = it.prepare_scene(board, 0.01, seed=0)
+    rail = it.prepare_scene(ex.scene_object, 0.01, seed=0)
+    at = np.eye(4)[None]
+    assert not MeshCollider(board.vertices, board.faces).collides(tensor.through_body(), at[0])
+    assert not through_crossed_poses(at, tensor, graze)[0]
+    assert through_crossed_poses(at, tensor, rail)[0]
+    assert MeshCollider(ex.scene_object.vertices, ex.scene_object.faces).collides(
+        tensor.through_body(), at[0])
+    # the same section without its top band: the board crosses it
+    full = through_section_of(ex.query, ex.scene_object,
+                              interactions.train_settings("hanging-hanger", 0.01, 0), band=0.0)
+    assert full[:, 2].max() > tensor.through_section[:, 2].max() + 0.002
+    assert MeshCollider(board.vertices, board.faces).collides(Body(*collision_polygon(full)),
+                                                              at[0])
+
+
 @given(st.integers(0, 2 ** 31 - 1), st.integers(1, 6), st.floats(0.0, 0.5))
 def test_suppression_with_a_test_picks_as_suppression_over_what_passes(seed, k, radius):
     rng = np.random.default_rng(seed)
@@ -232,6 +260,15 @@ def test_the_through_section_is_empty_where_nothing_passes_through_the_query():
     assert np.abs(section[:, 1]).max() < 0.003                      # across the rod
     r = np.linalg.norm(section[:, [0, 2]], axis=1)
     assert 0.015 < r.min() and r.max() <= 0.0215           # the rod + 1 cm (1 mm cells), in the ring
+    # less its top 5 mm (+Z within the ring's plane): the rest as before
+    banded = through_section(ring, rod, ring, 0.01, 0.0025, band=0.005)
+    assert banded[:, 2].max() <= section[:, 2].max() - 0.005 + 1e-9
+    assert banded[:, 2].min() == pytest.approx(section[:, 2].min(), abs=1e-9)
+    # a level ring (a strap lying flat) has no top to leave out
+    flat_ring, flat_rod = ring[:, [0, 2, 1]], rod[:, [0, 2, 1]]
+    np.testing.assert_allclose(through_section(flat_ring, flat_rod, flat_ring, 0.01, 0.0025,
+                                               band=0.005),
+                               through_section(flat_ring, flat_rod, flat_ring, 0.01, 0.0025))
 
 
 def test_the_scene_ground_level_is_the_lowest_sample_around(hanging):

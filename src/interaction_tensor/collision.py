@@ -154,7 +154,8 @@ def box(lo, hi):
 
 def through_section(query_vertices: np.ndarray, scene_points: np.ndarray,
                     query_points: np.ndarray, margin: float, gap: float,
-                    min_points: int = 12, cell: float = 0.001) -> np.ndarray:
+                    min_points: int = 12, cell: float = 0.001,
+                    band: float = 0.0) -> np.ndarray:
     """Where the scene-object passes through the query object in an example (a rail through
     a hook, a peg through a strap's loop), as a flat convex polygon: (K, 3) vertices in
     order, or (0, 3) when nothing of the scene-object lies inside the query's convex hull.
@@ -167,9 +168,13 @@ def through_section(query_vertices: np.ndarray, scene_points: np.ndarray,
     plane, less what lies within ``gap`` (m) of the query's surface: the opening of the hook
     around the rail, short of the wire. A surface that only touches the hook where it rests
     (a flat top under the hook) does not reach it; a rail, peg or panel edge through the
-    hook crosses it. The region is found on a grid of ``cell`` (m; coarser for a section
-    over 20 cm across: 200 cells at most). Detection poses the polygon and asks the scene's
-    triangles to cross it (:class:`~.detect.CollisionCheck`).
+    hook crosses it. Its top ``band`` (m, measured up +Z within the plane; none when the
+    plane is within 30 degrees of level) is left out as well: a surface that only grazes the
+    top of the opening (the hook pushed up into a board's underside, the wire in the board)
+    does not reach what is left, while a rail, peg or edge through the hook crosses it below.
+    The region is found on a grid of ``cell`` (m; coarser for a section over 20 cm across: 200
+    cells at most). Detection poses the polygon and asks the scene's triangles to cross it
+    (:class:`~.detect.CollisionCheck`).
     """
     from scipy import ndimage
     from scipy.spatial import ConvexHull, Delaunay, QhullError, cKDTree
@@ -212,6 +217,10 @@ def through_section(query_vertices: np.ndarray, scene_points: np.ndarray,
     if not keep.ravel()[middle]:
         return empty
     grid = grid[parts.ravel() == parts.ravel()[middle]]
+    up = np.array([u[2], w[2]])                      # +Z within the plane
+    if band > 0 and np.linalg.norm(up) >= 0.5:
+        height = grid @ (up / np.linalg.norm(up))
+        grid = grid[height <= height.max() - band]
     if len(grid) < 3:
         return empty
     try:

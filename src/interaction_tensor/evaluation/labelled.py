@@ -38,6 +38,11 @@ WIDE_SEAT = re.compile(r"sofa|bed|armchair|dining chair|office chair|bench seat"
 #: Place sites on a high working top (no board above it) where a person could be posed
 #: sitting on the edge with the feet in the air.
 HIGH_TOP = re.compile(r"counter|island|breakfast bar|workbench|kitchenette")
+#: How far (m) a board's underside reaches into the top of a hook's opening in the "pushed
+#: up into a board's underside" negatives: past the wire (the example's through-section
+#: keeps 2.5 mm from it) by a quarter of a millimetre, short of the judge's loop disk
+#: (3.5 mm inside the wire): a graze, with nothing through the hook.
+GRAZE = 0.00275
 #: The example judged for each affordance in the labelled set.
 EXAMPLE_OF = {"placing": "placing-bowl", "filling": "filling-mug",
               "hanging": "hanging-hanger", "sitting": "sitting-human",
@@ -131,6 +136,29 @@ def _nothing_under(scene_points, feet, pose, floor_gap: float = 0.05) -> bool:
     col = scene_points[np.all((scene_points[:, :2] >= lo) & (scene_points[:, :2] <= hi), axis=1)]
     floor = scene_points[:, 2].min() + floor_gap
     return not np.any((col[:, 2] > floor) & (col[:, 2] <= f[:, 2].min()))
+
+
+def _below_hook(example, drop: float = 0.02) -> np.ndarray:
+    """(N, 3) a hanging example's surface samples more than ``drop`` below its support point
+    (the hanger's body under the hook), training frame."""
+    from ..examples.interactions import surface_points
+
+    q = surface_points(example.query, 20000)
+    return q[q[:, 2] < example.support_point[2] - drop]
+
+
+def _underside(jscene, point, depth: float = 0.1, radius: float = 0.01):
+    """Height (m) of the underside of the board whose top ``point`` (3,) is on: the highest
+    sample within ``radius`` horizontally of it and between 3 mm and ``depth`` below it, whose
+    normal points down; None under a solid block (a counter) or with nothing there."""
+    p = np.asarray(point, float)
+    near = np.asarray(jscene.tree.query_ball_point(p - [0.0, 0.0, depth / 2],
+                                                   depth / 2 + radius), np.int64)
+    q = jscene.points[near]
+    under = ((np.hypot(q[:, 0] - p[0], q[:, 1] - p[1]) <= radius)
+             & (q[:, 2] <= p[2] - 0.003) & (q[:, 2] >= p[2] - depth)
+             & (jscene.normals[near, 2] < -0.9))
+    return float(q[under, 2].max()) if under.any() else None
 
 
 def _wall_behind(jscene, point, out_of_wall, reach: float = 0.3):
@@ -265,6 +293,19 @@ def _validation_poses(ex, name, vs, jscene) -> list:
         for s in by["place"][::2]:
             add(site_pose(ex, s.point, 0.7), False, "hook on a flat top, hanger through it",
                 s.note)
+        body = _below_hook(ex)
+        for i, s in enumerate(by["place"][1::2]):
+            under = _underside(jscene, s.point)
+            if under is None:
+                continue
+            pose = site_pose(ex, np.r_[s.point[:2], under + GRAZE], 0.4 + 0.8 * i)
+            if jscene.tree.query(body @ pose[:3, :3].T + pose[:3, 3])[0].min() >= 0.01:
+                # the hook pushed up into a board's underside, the wire in the board and the
+                # hanger hanging free below it: the board grazes the top of the opening and
+                # nothing goes through it (scans' wall cabinets and seat undersides gave
+                # such hooks that detection's through test passed)
+                add(pose, False, "hook pushed up into a board's underside, hanging free",
+                    s.note)
     elif aff == "placing":
         for i, s in enumerate(by["place"]):
             a = 0.4 * i

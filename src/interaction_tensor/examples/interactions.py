@@ -404,8 +404,8 @@ ACCEPTANCE: dict = {
                     feet_reach=0.25),                             # ground 62, feet 95/108
     "hanging": dict(threshold=0.03, clearance_limit=0.10, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),             # 100 %, 4.3 % (**)
-                    collision=[(0.01, None)], through=True,       # 90/105, with the
-                    below_ground=0.01),                           # ground test 95/105
+                    collision=[(0.01, None)], through=True,       # 110/125, with the
+                    below_ground=0.01),                           # ground test 115/125
     "filling": dict(threshold=0.575, clearance_limit=0.02, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),             # 100 %, 71.7 %
                     collision=[(0.01, None)], through=True),      # 12/72 (support under it)
