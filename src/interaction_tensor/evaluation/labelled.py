@@ -252,6 +252,8 @@ def _validation_poses(ex, name, vs, jscene) -> list:
                 s.note)
             if i % 2 == 0:
                 add(site_pose(ex, s.point, a, (0, 0, 0.12)), False, "hovering 12 cm", s.note)
+            else:
+                add(site_pose(ex, s.point, a, (0, 0, 0.06)), False, "hovering 6 cm", s.note)
         for s in by["seat"]:
             if WIDE_SEAT.search(s.note):
                 add(site_pose(ex, s.point, facing_angle(ex, s.facing)), False,
