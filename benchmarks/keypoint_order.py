@@ -1,13 +1,15 @@
-"""The two keypoint orders on one example and one published scene, whole detection at 30 %.
+"""The two keypoint orders on examples and published scenes, whole detection at 30 %.
 
-    python benchmarks/keypoint_order.py [EXAMPLE] [SCENE]     # default: sitting-human living-room4
+    python benchmarks/keypoint_order.py [EXAMPLE SCENE | EXAMPLE:SCENE ...]
+    # default: sitting-human living-room4
 
-Trains the example as ``itensor evaluate`` does (real query objects from ../shared/data/objects
-where there are some), prepares the scene at 1 cm, compiles the kernels on a tiny detection,
-then detects with ``keypoint_order="adaptive"`` and with the default (the paper's weight
-order), one after the other at the defaults otherwise (neighbour cache at 30 %). Prints
-each run's scoring time, candidates/s and comparisons per decision, and whether the two give
-identical decisions, accepted scores and predictions. Timings: benchmarks/RESULTS.md.
+Trains each example as ``itensor evaluate`` does (real query objects from
+../shared/data/objects where there are some), prepares the scene at 1 cm, compiles the
+kernels on a tiny detection, then detects with ``keypoint_order="adaptive"`` and with the
+paper's weight order, one after the other at the defaults otherwise (neighbour cache at
+30 %). Prints each run's scoring time, candidates/s and comparisons per decision, and
+whether the two give identical decisions, accepted scores and predictions. Timings:
+benchmarks/RESULTS.md.
 """
 
 from __future__ import annotations
@@ -22,12 +24,11 @@ DATA = Path(os.environ.get("ITENSOR_SHARED_DATA",
                            Path(__file__).resolve().parent.parent.parent / "shared" / "data"))
 
 
-def main() -> None:
+def compare(name: str, scene_name: str) -> float:
+    """Both orders on one (example, scene); returns adaptive's speed-up over weight."""
     import interaction_tensor as it
     from interaction_tensor.examples import interactions
 
-    name = sys.argv[1] if len(sys.argv) > 1 else "sitting-human"
-    scene_name = sys.argv[2] if len(sys.argv) > 2 else "living-room4"
     tensor = interactions.build_descriptor(name, seed=0, spacing=0.01,
                                            example=interactions.build(name, DATA / "objects", 0))
     scene = it.prepare_scene(it.load_geometry(DATA / "scenes" / f"{scene_name}.ply"), 0.01,
@@ -51,10 +52,23 @@ def main() -> None:
     acc = w.pairs.accepted
     same_pred = ([(p.point_index, p.orientation_index) for p in a.predictions]
                  == [(p.point_index, p.orientation_index) for p in w.predictions])
+    ratio = w.stats["seconds"]["scoring"] / a.stats["seconds"]["scoring"]
     print(f"identical decisions: {np.array_equal(a.pairs.accepted, acc)}; largest accepted "
           f"score difference: {np.abs(a.pairs.score[acc] - w.pairs.score[acc]).max(initial=0)}; "
-          f"identical predictions: {same_pred}; adaptive against weight: "
-          f"{w.stats['seconds']['scoring'] / a.stats['seconds']['scoring']:.2f}x")
+          f"identical predictions: {same_pred}; adaptive against weight: {ratio:.2f}x",
+          flush=True)
+    return ratio
+
+
+def main() -> None:
+    args = sys.argv[1:] or ["sitting-human", "living-room4"]
+    if all(":" not in a for a in args):
+        cases = [tuple(args[i:i + 2]) for i in range(0, len(args), 2)]
+    else:
+        cases = [tuple(a.split(":", 1)) for a in args]
+    ratios = [compare(name, scene) for name, scene in cases]
+    for (name, scene), r in zip(cases, ratios):
+        print(f"| {name} | {scene} | {r:.2f}x |")
 
 
 if __name__ == "__main__":

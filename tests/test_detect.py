@@ -2,6 +2,8 @@ import os
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import interaction_tensor as it
 from interaction_tensor.detect import candidate_mask, keypoint_table
@@ -235,6 +237,57 @@ def test_adaptive_keypoint_order_changes_only_the_work(corner_tensor):
         w, a = runs[backend, "weight"].pairs, runs[backend, "adaptive"].pairs
         assert a.decided_at[rej].mean() < w.decided_at[rej].mean()
     assert runs["numba", "adaptive"].stats["keypoint_order"] == "adaptive"
+
+
+@given(st.integers(0, 2 ** 31 - 1), st.floats(0.0, 1.0))
+@settings(max_examples=60, deadline=None)
+def test_simulated_cost_replays_the_kernels_early_exit(seed, frac):
+    """simulated_cost against a plain loop over keypoints with the kernels' decision rule."""
+    from interaction_tensor.detect import simulated_cost
+
+    rng = np.random.default_rng(seed)
+    p, n = int(rng.integers(1, 12)), int(rng.integers(1, 30))
+    max_terms = rng.uniform(0.0, 1.0, n)
+    max_terms /= max_terms.sum()
+    terms = max_terms * rng.uniform(0, 1, (p, n)) * (rng.uniform(size=(p, n)) < 0.8)
+    threshold = frac * float(max_terms.sum())
+    cost = rng.uniform(1, 5, n)
+    order = rng.permutation(n)
+    want = 0.0
+    for row in terms:
+        s, rest = 0.0, float(max_terms[order].sum())
+        for k in order:
+            s += row[k]
+            rest -= max_terms[k]
+            want += cost[k]
+            if s >= threshold - 1e-9 or s + rest < threshold - 1e-9:
+                break
+    assert simulated_cost(terms, max_terms, cost, threshold, order) == pytest.approx(want)
+
+
+def test_the_adaptive_order_is_the_cheapest_of_its_candidates_on_the_pilot(corner_tensor):
+    """pilot_order returns a permutation whose replayed early exit on the pilot's pairs costs
+    no more than the paper's weight order (one of its candidates)."""
+    import importlib
+
+    from interaction_tensor.scoring import all_terms
+
+    D = importlib.import_module("interaction_tensor.detect")
+
+    scene_geometry, _ = moved_corner_scene(0.4, np.array([0.1, -0.2, 0.0]))
+    scene = it.prepare_scene(scene_geometry, 0.01, seed=6)
+    det = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2))
+    table = keypoint_table(corner_tensor, det.settings)
+    order = D.pilot_order(table, scene, det.pair_point, det.pair_orientation, None,
+                          corner_tensor.vectors, 64, 0, det.threshold)
+    assert sorted(order) == list(range(table.n))
+    terms = all_terms(scene.points[det.pair_point], det.pair_orientation, table, scene,
+                      corner_tensor.vectors, lambda q: scene.tree.query(q)[1])
+    flat = np.ones(table.n)
+    # on all the pairs (not just the pilot's), with unit costs: no worse than 1.2x weight
+    assert (D.simulated_cost(terms, table.max_terms, flat, det.threshold, order)
+            <= 1.2 * D.simulated_cost(terms, table.max_terms, flat, det.threshold,
+                                      np.arange(table.n)))
 
 
 def test_default_detection_keeps_the_papers_partial_scores(corner_tensor):

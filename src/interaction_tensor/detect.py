@@ -268,34 +268,79 @@ def _prepare_index(scene: Scene, settings: DetectSettings):
     return backend, None
 
 
+#: Distance (m) at which :func:`pilot_order` models a lookup as costing twice one at a
+#: surface (the measured profile: 2x at 2-5 cm, 6-15x at 5-12 cm).
+LOOKUP_COST_SCALE = 0.03
+#: The blends :func:`pilot_order` tries between ordering for acceptance (0: the largest
+#: expected term first) and for rejection (1: the largest expected shortfall first).
+ORDER_BLENDS = (0.0, 0.25, 0.5, 0.75, 1.0)
+
+
+def simulated_cost(terms: np.ndarray, max_terms: np.ndarray, cost: np.ndarray,
+                   threshold: float, order: np.ndarray, eps: float = 1e-9) -> float:
+    """Summed lookup cost of deciding pairs whose every term is known (``terms`` (P, N),
+    ``max_terms`` (N,), per-keypoint ``cost`` (N,)) when keypoints are compared in ``order``
+    with the kernels' early exit: accepted once the running score reaches ``threshold``,
+    rejected once even the largest rest cannot (``_numba_kernels._decision``)."""
+    t = terms[:, order]
+    run = np.cumsum(t, axis=1)
+    rest = float(max_terms.sum()) - np.cumsum(max_terms[order])
+    done = (run >= threshold - eps) | (run + rest[None] < threshold - eps)
+    done[:, -1] = True
+    at = np.argmax(done, axis=1)
+    return float(np.cumsum(cost[order])[at].sum())
+
+
 def pilot_order(table, scene: Scene, pair_point: np.ndarray, orient: np.ndarray, grid,
-                vectors: str, n_pairs: int, seed: int) -> np.ndarray:
+                vectors: str, n_pairs: int, seed: int, threshold: float) -> np.ndarray:
     """Keypoint order for :attr:`DetectSettings.keypoint_order` ``adaptive``.
 
-    Scores ``n_pairs`` seeded random (test point, orientation) pairs on every keypoint and
-    orders keypoints by their mean shortfall (largest possible term minus the term reached),
-    largest first: the keypoints that fail most often in this scene are compared first.
+    Scores ``n_pairs`` seeded random (test point, orientation) pairs on every keypoint, then
+    replays their early exit (:func:`simulated_cost`) in candidate orders and returns the
+    cheapest: the table's own (the paper's weight order) and, for each blend ``b`` of
+    :data:`ORDER_BLENDS`, keypoints by ``(1 - b) * term / threshold + b * shortfall /
+    (total - threshold)`` per unit of lookup cost, largest first (the mean term reached, the
+    mean shortfall from the largest possible term, each as a share of what decides a pair:
+    a low threshold is reached by the heavy keypoints, a high one failed by the ones that
+    miss most). A lookup's cost grows with the distance ``d`` of its nearest sample (the grid
+    search visits the cells of that ball): modelled as ``1 + (d / LOOKUP_COST_SCALE)**2``
+    from the measured profile (benchmarks/RESULTS.md: about 330 ns within 2 cm of a surface,
+    660 ns at 2-5 cm, 2-5 us beyond), averaged over the pilot's queries of each keypoint.
+    Distances, not timings: the order is the same on every run. Ties go to the weight order.
 
     Parameters
     ----------
     pair_point : (P,) scene index of each pair's test point; orient : (P,) orientation index
     grid : the Numba grid, or None to use the scene's cKDTree
+    threshold : the score that accepts a pair
     """
     if len(pair_point) == 0:
         return np.arange(table.n)
     rng = np.random.default_rng((seed, 0x1D0))
     pick = np.sort(rng.choice(len(pair_point), size=min(n_pairs, len(pair_point)), replace=False))
+    found = []
     if grid is not None:
         from .kernels import nearest_indices
 
         def nearest(q):
-            return nearest_indices(grid, q)
+            found.append((q, nearest_indices(grid, q)))
+            return found[-1][1]
     else:
         def nearest(q):
-            return scene.tree.query(q, workers=-1)[1]
+            found.append((q, scene.tree.query(q, workers=-1)[1]))
+            return found[-1][1]
     terms = all_terms(scene.points[pair_point[pick]], orient[pick], table, scene, vectors, nearest)
-    shortfall = (table.max_terms - terms).mean(0)
-    return np.argsort(-shortfall, kind="stable")
+    q, idx = found[0]
+    dist = np.linalg.norm(scene.points[idx] - q, axis=1).reshape(terms.shape)
+    cost = (1.0 + (dist / LOOKUP_COST_SCALE) ** 2).mean(0)
+    total = float(table.max_terms.sum())
+    gain = terms.mean(0) / max(threshold, 1e-12)
+    shortfall = (table.max_terms - terms).mean(0) / max(total - threshold, 1e-12)
+    orders = [np.arange(table.n)] + [
+        np.argsort(-((1 - b) * gain + b * shortfall) / cost, kind="stable")
+        for b in ORDER_BLENDS]
+    spent = [simulated_cost(terms, table.max_terms, cost, threshold, o) for o in orders]
+    return orders[int(np.argmin(spent))]
 
 
 def spatial_order(points: np.ndarray, pair_points: np.ndarray, n_o: int, grid) -> np.ndarray:
@@ -612,7 +657,8 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
         for job in jobs:
             order = pilot_order(job.table, scene, job.points, job.orient,
                                 index if backend == "numba" else None,
-                                job.vectors, settings.pilot_pairs, settings.seed)
+                                job.vectors, settings.pilot_pairs, settings.seed,
+                                job.threshold)
             job.table = permuted(job.table, order)
         timings["keypoint_order"] = time.perf_counter() - t1
     t2 = time.perf_counter()
