@@ -212,6 +212,8 @@ def _validation_poses(ex, name, vs, jscene) -> list:
                 # the back 3.5 cm into the backrest, the legs as free as on the seat
                 add(site_pose(ex, s.point, a, (fwd - gap - 0.035) * f), False,
                     "leaning 3.5 cm into the backrest", s.note)
+            add(site_pose(ex, s.point, a, fwd * f + [0, 0, -0.04]), False,
+                "sunk 4 cm into the seat", s.note)
             if i % 2 == 0:
                 add(site_pose(ex, s.point, a, fwd * f + [0, 0, -0.10]), False,
                     "sunk 10 cm into the seat", s.note)
