@@ -220,7 +220,7 @@ def test_feet_on_a_step_high_above_the_floor_are_no_seat_and_a_foot_rest_is(pose
 
 def test_a_rider_on_a_tall_partition_is_out_of_reach_and_one_on_a_low_wall_rides(poses):
     """The judge traps' walls: astride a 0.9 m wall's top is pretend riding (valid); astride
-    a 1.6 or 2.4 m partition's top the rider passes every other test (the partition goes on
+    a 1.4, 1.6 or 2.4 m partition's top the rider passes every other test (the partition goes on
     between the legs, the legs have room, the seat touches) and is out of reach from the
     floor (the published kitchens' top riders straddled their 2.4-2.7 m walls)."""
     from interaction_tensor.evaluation.judge import Judge, JudgeScene, JudgeSettings
@@ -228,7 +228,7 @@ def test_a_rider_on_a_tall_partition_is_out_of_reach_and_one_on_a_low_wall_rides
 
     walls = [p for p in poses if p.affordance == "riding" and "wall" in p.case
              or "partition" in p.case]
-    assert sum(p.valid for p in walls) >= 6 and sum(not p.valid for p in walls) >= 12
+    assert sum(p.valid for p in walls) >= 6 and sum(not p.valid for p in walls) >= 18
     ex = interactions.build("riding-human", _objects())
     scene = JudgeScene(validation.build_scene("judge_traps").geometry)
     judge = Judge.for_example(ex)
@@ -241,5 +241,5 @@ def test_a_rider_on_a_tall_partition_is_out_of_reach_and_one_on_a_low_wall_rides
             assert 0.85 <= v.seat_height <= 1.0
         else:
             assert len(v.reasons) == 1 and v.reasons[0].endswith("out of reach to ride")
-            assert v.seat_height > 1.6
+            assert v.seat_height > 1.4 > judge.settings.seat_above_ground
             assert lenient.judge(scene, np.asarray(p.pose)).valid

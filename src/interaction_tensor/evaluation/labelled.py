@@ -393,7 +393,7 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
                               site_pose(ex, point, angle, (0.01 - calves) * d), False,
                               "on a floor's open edge, legs hanging below it", note))
         # riders astride the top of a low wall (0.9 m: pretend riding) and of partitions of
-        # 1.6 and 2.4 m (out of reach, the feet dangling 0.7-1.5 m above the floor; the
+        # 1.4, 1.6 and 2.4 m (out of reach, the feet dangling 0.5-1.5 m above the floor; the
         # published kitchens' top riders straddled their 2.4-2.7 m walls)
         ex = examples["riding"]
         for point, angle, height, note in validation.wall_top_rides():

@@ -213,8 +213,8 @@ def _judge_traps():
     has the calves along the front, :func:`flush_counter_edges`); two stepped units, a low
     one (a seat with a foot rest 20 cm up) and a tall one (its top 1.65 m up, the step 1.2 m:
     :func:`stepped_unit_seats`); and the floor slab's open +x and +y edges
-    (:func:`floor_edge_seats`). For the riding judge: a low wall (0.9 m), a partition of
-    1.6 m and a tall one (2.4 m), each 1.2 m long, whose tops a rider can straddle
+    (:func:`floor_edge_seats`). For the riding judge: a low wall (0.9 m), partitions of
+    1.4 m and 1.6 m and a tall one (2.4 m), each 1.2 m long, whose tops a rider can straddle
     (:func:`wall_top_rides`)."""
     k = F._Kit()
     k.box((-0.6, -0.3, 0.71), (0.6, 0.3, 0.74))                      # table top
@@ -276,7 +276,8 @@ TRAPS_SIZE = (5.6, 3.4)
 #: The judge traps' walls a rider can straddle: (name, centre x, centre y, height,
 #: thickness), all 1.2 m long along y.
 WALL_TOPS = (("low wall", 4.9, 0.9, 0.9, 0.12), ("tall partition", 4.9, 2.5, 2.4, 0.10),
-             ("mid partition", 4.2, 1.7, 1.6, 0.10))
+             ("mid partition", 4.2, 1.7, 1.6, 0.10), ("chest-high partition", 0.45, 1.7, 1.4,
+                                                      0.10))
 
 
 def wall_top_rides() -> list:
