@@ -172,18 +172,20 @@ class DetectSettings:
     #: Stop comparing a candidate as soon as its decision is known (paper, section 4.2.1).
     early_exit: bool = True
     #: Order in which keypoints are compared. ``weight`` (default): largest weight first (the
-    #: paper's, and the authors' code's). ``adaptive``: those that fail most often first,
-    #: measured on a seeded pilot of this scene's own candidates, so that rejections come
-    #: sooner. Scores are sums over keypoints, so the order never changes a decision, an
-    #: accepted score (bit for bit with the paper's criterion, to rounding with the gaussian
-    #: one), the heat map or the predictions (tested). It does change what depends on where
-    #: the early exit stopped: a rejected pair's partial score and every pair's ``decided_at``
+    #: paper's, and the authors' code's). ``adaptive``: the cheapest order on a seeded pilot
+    #: of this scene's own pairs (:func:`~interaction_tensor.detect.pilot_order`: the weight
+    #: order or a blend of ordering for acceptance and for rejection per unit of modelled
+    #: lookup cost, whichever decides the pilot's pairs with the least search). Scores are
+    #: sums over keypoints, so the order never changes a decision, an accepted score (bit for
+    #: bit with the paper's criterion, to rounding with the gaussian one), the heat map or the
+    #: predictions (tested). It does change what depends on where the early exit stopped: a
+    #: rejected pair's partial score and every pair's ``decided_at``
     #: (``comparisons_to_decision`` in predictions.json). Measured at 30 % with the neighbour
-    #: cache (2026-11-25): 1.50x the candidates/s of the weight order for placing-bowl on
-    #: kitchen5, 1.20x on living-room4, but 0.71x for sitting-human on living-room4 and
-    #: 0.68x for placing-bowl on office-desk1 (one noisy run). The person probably loses
-    #: because its keypoints that fail most often lie far from any surface, where a lookup
-    #: costs most. So it is not the default; ``itensor evaluate`` asks for ``weight`` itself.
+    #: cache and the tuned descriptors (2026-11-27, benchmarks/RESULTS.md): 0.97x the weight
+    #: order's speed for placing-bowl on kitchen5, 1.00x on office-desk1, 1.05x for
+    #: sitting-human on office-desk5 (10-20 % fewer comparisons; the rest of the scoring
+    #: stage dominates). So it is not the default; ``itensor evaluate`` asks for ``weight``
+    #: itself.
     keypoint_order: str = "weight"
     #: Pairs fully scored to measure the adaptive order.
     pilot_pairs: int = 256
