@@ -39,6 +39,16 @@ height of ``MOUNT_HEIGHTS``: kept is the height that rejects the most invalid po
 those that keep every valid one, ties to the larger height (the more lenient, as for the
 feet), and only when it rejects more than the tests before it.
 
+Then, for the people whose contact test was not tuned on the validation pairs (riding: off
+there, ``interactions.ACCEPTANCE``),
+the seat contact test (``clearance.seat_fractions_poses``: the fraction of the person's seat
+region, the judge's main contact, whose nearest scene sample, on the scene sampled at 1 cm,
+lies within ``d``) at each distance of ``CONTACT_DISTANCES`` and fraction of
+``CONTACT_FRACTIONS`` on top of every test kept before: kept is the option that rejects the
+most invalid poses among those that keep every valid one, ties to the larger distance and
+then the smaller fraction (the more lenient), and only when it rejects more than the tests
+before it.
+
     python scripts/choose_collision.py --objects ../shared/data/objects \\
         --shared ../shared/data -o docs/results/collision
 """
@@ -54,6 +64,7 @@ import numpy as np
 
 from interaction_tensor import collision
 from interaction_tensor.clearance import (above_ground, below_ground, feet_gaps_poses,
+                                         seat_fractions_poses,
                                          standing_groups, straddle_passes_poses)
 from interaction_tensor.scene import prepare_scene
 from interaction_tensor.evaluation import labelled
@@ -66,6 +77,7 @@ DEPTHS = (0.01, 0.02, 0.05, 0.1, 0.2)
 GROUND_DEPTHS = (0.01, 0.02, 0.05, 0.1)
 FEET_REACHES = (0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5)
 AFFORDANCES = ("placing", "sitting", "hanging", "filling", "riding")
+PERSONS = ("sitting", "riding")
 #: The straddle test's boxes (m, training frame, relative to the seat point; x ahead): the
 #: astride box (6 cm wide, 12-32 cm ahead of the seat, 30 cm below to 2 cm above it) and
 #: legroom boxes on either side (10 cm behind to 20 cm ahead of the seat, 14 cm below to 2
@@ -86,6 +98,8 @@ def straddle_option(astride: bool, lateral) -> dict:
 
 
 MOUNT_HEIGHTS = (1.0, 1.2, 1.3, 1.5, 2.0)
+CONTACT_DISTANCES = (0.01, 0.02, 0.03, 0.05)
+CONTACT_FRACTIONS = (0.02, 0.05, 0.1, 0.25)
 STRADDLE_OPTIONS = [(a, lat) for a in (True, False) for lat in (None,) + STRADDLE_LATERAL
                     if a or lat is not None]
 
@@ -125,7 +139,8 @@ def options(rows: list) -> list:
 
 def passes(rows: list, tests, through: bool):
     """(valid, passes the option, below ground m, {reach: stands}, {straddle option:
-    passes}, above ground m) per pose of one affordance's rows."""
+    passes}, above ground m, {distance: seat region fraction touching}) per pose of one
+    affordance's rows."""
     poses = sorted({r["pose"] for r in rows})
     index = {p: k for k, p in enumerate(poses)}
     valid = np.zeros(len(poses), bool)
@@ -134,8 +149,12 @@ def passes(rows: list, tests, through: bool):
     gap = np.zeros(len(poses))
     high = np.zeros(len(poses))
     straddle = {o: np.ones(len(poses), bool) for o in STRADDLE_OPTIONS}
+    seat = {d: np.ones(len(poses)) for d in CONTACT_DISTANCES}
     for r in rows:
         k = index[r["pose"]]
+        for d in CONTACT_DISTANCES:
+            if r[f"seat {d:g}"] != "":
+                seat[d][k] = float(r[f"seat {d:g}"])
         for a, lat in STRADDLE_OPTIONS:
             if r[f"straddle {a} {lat}"] is False:
                 straddle[(a, lat)][k] = False
@@ -146,7 +165,7 @@ def passes(rows: list, tests, through: bool):
         for above, depth in tests:
             if r["above"] == _label(above) and float(r["separation_m"]) > depth:
                 ok[k] = False
-    return valid, ok, below, {f: gap <= f for f in FEET_REACHES}, straddle, high
+    return valid, ok, below, {f: gap <= f for f in FEET_REACHES}, straddle, high, seat
 
 
 def main(argv=None) -> int:
@@ -193,6 +212,10 @@ def main(argv=None) -> int:
         below = float(below_ground(at, tensor, scenes[p.scene])[0])
         high = float(above_ground(at, tensor, scenes[p.scene])[0])
         gap = float(feet_gaps_poses(pose[None], tensor, scenes[p.scene])[0])
+        seat = {f"seat {d:g}": round(float(seat_fractions_poses(pose[None], tensor, d,
+                                                                scenes[p.scene])[0]), 4)
+                for d in CONTACT_DISTANCES} if p.affordance in PERSONS else \
+            {f"seat {d:g}": "" for d in CONTACT_DISTANCES}
         for above, body in bodies.items():
             sep = colliders[p.scene].separation(body, pose, limit=max(DEPTHS))
             rows.append({"affordance": p.affordance, "example": p.example, "scene": p.scene,
@@ -201,6 +224,7 @@ def main(argv=None) -> int:
                          "through": crossed, "below_ground_m": round(below, 4),
                          "above_ground_m": round(high, 4),
                          "feet_gap_m": round(gap, 4) if np.isfinite(gap) else str(gap),
+                         **seat,
                          **{k: straddles.get(k, "") for k in
                             (f"straddle {a} {lat}" for a, lat in STRADDLE_OPTIONS)}})
     out = Path(args.out)
@@ -250,7 +274,7 @@ def main(argv=None) -> int:
                   "standing contacts):", "",
                   "| affordance | feet reach m | valid kept | invalid rejected | chosen |",
                   "|---|---:|---:|---:|:---:|"]
-    straddle_choice, mount_choice = {}, {}
+    straddle_choice, mount_choice, final = {}, {}, {}
     mount_table = ["", "The mount test added to the kept straddle option:", "",
                    "| affordance | seat above the ground m | valid kept | invalid rejected | "
                    "chosen |", "|---|---:|---:|---:|:---:|"]
@@ -263,8 +287,8 @@ def main(argv=None) -> int:
     for aff, o in chosen.items():
         if o is None:
             continue
-        valid, ok, below, feet, straddle, high = passes([r for r in rows if r["affordance"] == aff], o[0],
-                                        o[1])
+        valid, ok, below, feet, straddle, high, seat = passes(
+            [r for r in rows if r["affordance"] == aff], o[0], o[1])
         base = int((~ok[~valid]).sum())
         ground[aff] = None
         for g in GROUND_DEPTHS:
@@ -294,6 +318,7 @@ def main(argv=None) -> int:
                         int((~(oks & (high <= h)))[~valid].sum())) for h in MOUNT_HEIGHTS]
             good = [t for t in tried_m if t[1] == int(valid.sum()) and t[2] > base_m]
             mount_choice[aff] = max(good, key=lambda t: (t[2], t[0]))[0] if good else None
+            okg = oks & (high <= mount_choice[aff]) if mount_choice[aff] else oks
             for h, kept, rejected in tried_m:
                 mount_table.append(f"| {aff} | {h:g} | {kept}/{int(valid.sum())} | {rejected}/"
                                    f"{int((~valid).sum())} (without it {base_m}) | "
@@ -304,6 +329,7 @@ def main(argv=None) -> int:
                     f"{'' if o[1] is None else f'{o[1][0]:g}-{o[1][1]:g}'} | "
                     f"{kept}/{int(valid.sum())} | {rejected}/{int((~valid).sum())} "
                     f"(without it {base_s}) | {'**yes**' if o == best_s else ''} |")
+        final[aff] = (valid, seat, okg)
         if not standing_groups(examples_of[aff]):
             feet_choice[aff] = None
             continue
@@ -315,10 +341,31 @@ def main(argv=None) -> int:
         good = [t for t in tried if t[1] == int(valid.sum()) and t[2] > base_g]
         best_f = max(good, key=lambda t: (t[2], t[0]))[0] if good else None
         feet_choice[aff] = best_f
+        final[aff] = (valid, seat, okg & feet[best_f] if best_f else okg)
         for f, kept, rejected in tried:
             feet_table.append(f"| {aff} | {f:g} | {kept}/{int(valid.sum())} | {rejected}/"
                               f"{int((~valid).sum())} (without it {base_g}) | "
                               f"{'**yes**' if f == best_f else ''} |")
+    contact_choice = {}
+    contact_table = ["", "The seat contact test added to every test kept before (the people "
+                     "whose contact test was not tuned on the validation pairs):", "",
+                     "| affordance | distance m | fraction | valid kept | invalid rejected | "
+                     "chosen |", "|---|---:|---:|---:|---:|:---:|"]
+    for aff, (valid, seat, okf) in final.items():
+        if aff not in PERSONS or interactions.acceptance(aff)["contact"][0] not in ("off",
+                                                                                   "seat"):
+            continue
+        base_c = int((~okf[~valid]).sum())
+        tried = [((d, f), int((okf & (seat[d] >= f - 1e-9))[valid].sum()),
+                  int((~(okf & (seat[d] >= f - 1e-9)))[~valid].sum()))
+                 for d in CONTACT_DISTANCES for f in CONTACT_FRACTIONS]
+        good = [t for t in tried if t[1] == int(valid.sum()) and t[2] > base_c]
+        contact_choice[aff] = max(good, key=lambda t: (t[2], t[0][0], -t[0][1]))[0] \
+            if good else None
+        for (d, f), kept, rejected in tried:
+            contact_table.append(f"| {aff} | {d:g} | {f:g} | {kept}/{int(valid.sum())} | "
+                                 f"{rejected}/{int((~valid).sum())} (without it {base_c}) | "
+                                 f"{'**yes**' if (d, f) == contact_choice[aff] else ''} |")
     for aff, o in chosen.items():
         lines.append(f"- {aff}: " + ("none keeps every valid pose" if o is None else
                                      "collision=" + repr([(d, a) for a, d in o[0]]) +
@@ -327,8 +374,11 @@ def main(argv=None) -> int:
                                      + (f", straddle={straddle_option(*straddle_choice[aff])}"
                                         if straddle_choice.get(aff) else "")
                                      + (f", mount_height={mount_choice[aff]}"
-                                        if mount_choice.get(aff) else "")))
-    lines += table + feet_table + straddle_table + mount_table
+                                        if mount_choice.get(aff) else "")
+                                     + (f", contact=('seat', {contact_choice[aff][0]}, "
+                                        f"{contact_choice[aff][1]})"
+                                        if contact_choice.get(aff) else "")))
+    lines += table + feet_table + straddle_table + mount_table + contact_table
     (out / "choice.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
     return 0

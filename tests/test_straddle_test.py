@@ -16,8 +16,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import interaction_tensor as it
-from interaction_tensor.clearance import (FAILS_MOUNT, FAILS_STRADDLE, PLACED, above_ground,
-                                          box_occupied, check_placements, straddle_passes,
+from interaction_tensor.clearance import (FAILS_CONTACT, FAILS_MOUNT, FAILS_STRADDLE, PLACED,
+                                          SEAT_POINTS, SEAT_RADIUS, SEAT_REGION_HEIGHT,
+                                          above_ground, box_occupied, check_placements,
+                                          seat_fractions_poses, seat_region, straddle_passes,
                                           straddle_passes_at, straddle_passes_poses)
 from interaction_tensor.errors import InputError
 from interaction_tensor.examples import interactions
@@ -127,6 +129,32 @@ def test_a_rider_astride_a_bench_passes_and_across_it_or_on_a_bed_does_not(ridin
     # the seat is the bench's top, the bench between the legs: a rider, not a hover
     seat = poses[0][:3, :3] @ riding.reference_point + poses[0][:3, 3]
     assert seat[2] == pytest.approx(0.5) and abs(seat[1]) < 0.05
+
+
+def test_a_rider_touching_the_bench_passes_the_seat_contact_and_one_hovering_does_not(
+        riding, room, tmp_path):
+    """Riding's contact test (mode ``seat``): at least its fraction of the seat region, the
+    rider's surface within 3 cm above its lowest point near the seat (the judge's main
+    contact of a person), within its distance of the scene. Astride the bench it touches;
+    raised 6 cm (a hover) it does not; the mode survives a descriptor file."""
+    assert riding.contact_groups == "seat"
+    region = seat_region(riding)
+    assert 20 <= len(region) <= SEAT_POINTS
+    assert np.ptp(region[:, 2]) <= SEAT_REGION_HEIGHT + 1e-9
+    assert np.linalg.norm(region - riding.reference_point, axis=1).max() <= SEAT_RADIUS
+    bench = [0.0, 0.0, 0.5]
+    pose = riding.pose(bench, 0.0)
+    up = pose.copy()
+    up[2, 3] += 0.06
+    frac = seat_fractions_poses(np.stack([pose, up]), riding, riding.contact_distance, room)
+    assert frac[0] >= riding.contact_fraction and frac[1] == 0
+    only = dict(STRADDLE_ONLY, straddle=False, contact=True)
+    points = np.array([bench, [0.0, 0.0, 0.56]])
+    out = check_placements(points, np.array([0, 0]), riding, it.DetectSettings(**only), room)[1]
+    assert out.tolist() == [PLACED, FAILS_CONTACT]
+    back = it.InteractionTensor.load(riding.save(tmp_path / "riding.npz"))
+    assert back.contact_groups == "seat"
+    np.testing.assert_array_equal(seat_region(back), region)
 
 
 def test_detection_on_the_bench_and_bed_keeps_riders_along_the_bench_only(riding, room):

@@ -98,8 +98,20 @@ THROUGH_MIN_ANGLE = 30.0
 #: samples a placement at 1 cm, each tested against every edge of the polygon (about 25:
 #: 400 bytes each), so a chunk takes some 60 MB.
 THROUGH_CHUNK = 4_000
-#: Contact modes: no contact test, the main group (at the reference point), every group.
-CONTACT_MODES = ("off", "main", "all")
+#: Contact modes: no contact test, the main group (at the reference point), every group,
+#: or a person's seat region (:func:`seat_region`).
+CONTACT_MODES = ("off", "main", "all", "seat")
+#: A person's seat region (the ``seat`` contact mode; the judge's main contact of a person,
+#: ``evaluation.judge.Judge._main_contact``): the query's surface within
+#: ``SEAT_REGION_HEIGHT`` (m) above its lowest point among the samples within
+#: ``SEAT_RADIUS`` (m) of the reference point and not lower than it by more than that
+#: height: buttocks, crotch and thighs, whichever a seat of another shape touches.
+SEAT_RADIUS = 0.3
+SEAT_REGION_HEIGHT = 0.03
+#: Query surface samples the seat region is found among, and at most how many of them it
+#: keeps (evenly thinned: each placement looks each one up).
+SEAT_SAMPLES = 20_000
+SEAT_POINTS = 128
 
 
 def point_offsets(points, reference_point, n_orientations: int) -> np.ndarray:
@@ -223,13 +235,73 @@ def contact_fractions(points, orient, tensor, tests, n_orientations: int, scene,
     return out
 
 
+def seat_region(tensor) -> np.ndarray:
+    """(S, 3) training-frame samples of the descriptor's seat region (see
+    :data:`SEAT_RADIUS`), at most :data:`SEAT_POINTS`; seeded, so the same on every call
+    (kept on the descriptor after the first)."""
+    cached = getattr(tensor, "_seat_region", None)
+    if cached is not None:
+        return cached
+    from .io import Geometry
+    from .sampling import sample_mesh
+
+    region = np.zeros((0, 3))
+    if len(tensor.query_faces):
+        pts, _ = sample_mesh(Geometry(np.asarray(tensor.query_vertices, float),
+                                      np.asarray(tensor.query_faces)), SEAT_SAMPLES, 0)
+        ref = np.asarray(tensor.reference_point, float)
+        near = ((np.linalg.norm(pts - ref, axis=1) <= SEAT_RADIUS)
+                & (pts[:, 2] >= ref[2] - SEAT_REGION_HEIGHT))
+        if near.any():
+            low = pts[near, 2].min()
+            region = pts[near & (pts[:, 2] <= low + SEAT_REGION_HEIGHT)]
+            if len(region) > SEAT_POINTS:
+                region = region[np.linspace(0, len(region) - 1, SEAT_POINTS).astype(np.int64)]
+    tensor._seat_region = region
+    return region
+
+
+def seat_fractions_at(rot, shift, tensor, distance: float, scene, grid=None) -> np.ndarray:
+    """(P,) fraction of the seat region (:func:`seat_region`) posed by ``rot`` (P, 3, 3) and
+    ``shift`` (P, 3) whose nearest scene sample lies within ``distance`` (m); 1 where the
+    descriptor has no seat region."""
+    rot = np.asarray(rot, float).reshape(-1, 3, 3)
+    region = seat_region(tensor)
+    if len(region) == 0 or len(rot) == 0:
+        return np.ones(len(rot))
+    q = np.einsum("pij,kj->pki", rot, region) + np.asarray(shift, float).reshape(-1, 1, 3)
+    d, _ = nearest_samples(q.reshape(-1, 3), scene, grid)
+    return (d.reshape(q.shape[:2]) <= distance).mean(axis=1)
+
+
+def seat_fractions(points, orient, tensor, distance: float, n_orientations: int, scene,
+                   grid=None, chunk: int = 8192) -> np.ndarray:
+    """(P,) :func:`seat_fractions_at` of placements (test points (P, 3), orientation
+    indices (P,)), ``chunk`` placements at a time."""
+    points = np.asarray(points, float).reshape(-1, 3)
+    rots = rotation_z(2 * np.pi * np.arange(n_orientations) / n_orientations)
+    out = np.ones(len(points))
+    for s in range(0, len(points), chunk):
+        rot = rots[np.asarray(orient[s:s + chunk], np.int64)]
+        shift = points[s:s + chunk] - np.einsum("pij,j->pi", rot, tensor.reference_point)
+        out[s:s + chunk] = seat_fractions_at(rot, shift, tensor, distance, scene, grid)
+    return out
+
+
+def seat_fractions_poses(poses, tensor, distance: float, scene, grid=None) -> np.ndarray:
+    """(P,) :func:`seat_fractions_at` of placements given as 4x4 poses (P, 4, 4)."""
+    poses = np.asarray(poses, float).reshape(-1, 4, 4)
+    return seat_fractions_at(poses[:, :3, :3], poses[:, :3, 3], tensor, distance, scene, grid)
+
+
 def contact_kept(fractions: np.ndarray, mode: str, fraction: float) -> np.ndarray:
     """(P,) bool: placements whose contact groups (``fractions`` (P, G) from
     :func:`contact_fractions`) pass: group 0 (``main``) or every group (``all``) has at least
-    ``fraction`` of its points touching; always true with ``off`` or no groups."""
+    ``fraction`` of its points touching; always true with ``off`` or no groups (the ``seat``
+    mode is :func:`seat_fractions`' instead)."""
     if mode not in CONTACT_MODES:
         raise ValueError(f"contact mode must be one of {CONTACT_MODES}, got {mode!r}")
-    if mode == "off" or fractions.shape[1] == 0:
+    if mode in ("off", "seat") or fractions.shape[1] == 0:
         return np.ones(len(fractions), bool)
     f = fractions[:, :1] if mode == "main" else fractions
     return (f >= fraction - 1e-9).all(axis=1)
@@ -538,7 +610,11 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
         outcome[viol > limit * k] = FAILS_CLEARANCE
     mode = tensor.contact_groups if settings.contact else "off"
     todo = np.flatnonzero(outcome == PLACED)
-    if mode != "off" and len(tensor.contact_group_ids) and len(todo):
+    if mode == "seat" and len(todo):
+        frac = seat_fractions(points[todo], orient[todo], tensor, tensor.contact_distance, n_o,
+                              scene, grid)
+        outcome[todo[frac < tensor.contact_fraction - 1e-9]] = FAILS_CONTACT
+    elif mode != "off" and len(tensor.contact_group_ids) and len(todo):
         frac = contact_fractions(points[todo], orient[todo], tensor,
                                  [(tensor.contact_distance, tensor.contact_angle)], n_o, scene,
                                  grid)[:, 0]

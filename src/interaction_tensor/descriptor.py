@@ -133,7 +133,8 @@ class InteractionTensor:
         example's ground) in the example, grouped
     contact_group_ids : (G,) int group of each; group 0 is the one at the reference point
     contact_group_normals : (G, 3) unit normal of the scene-object (or ground) each touched
-    contact_groups : contact test mode, ``off``, ``main`` (group 0) or ``all``
+    contact_groups : contact test mode, ``off``, ``main`` (group 0), ``all`` or ``seat`` (a
+        person's seat region: ``clearance.seat_region``)
     contact_distance, contact_fraction, contact_angle : a group keeps its contact when this
         fraction of its points have their nearest scene sample within this distance (m),
         whose normal line lies within this angle (degrees; 90: any) of the example's
@@ -255,10 +256,10 @@ class InteractionTensor:
                 raise ValueError(f"{name} must be in [0, 1]")
         if contact is not None:
             mode, distance, fraction, angle = (tuple(contact) + (90.0,))[:4]
-            if mode not in ("off", "main", "all") or not distance > 0 or \
+            if mode not in ("off", "main", "all", "seat") or not distance > 0 or \
                     not 0 <= fraction <= 1 or not 0 < angle <= 90:
-                raise ValueError("contact must be (off|main|all, distance > 0, fraction in "
-                                 "[0, 1][, angle in (0, 90]])")
+                raise ValueError("contact must be (off|main|all|seat, distance > 0, fraction "
+                                 "in [0, 1][, angle in (0, 90]])")
         for name, value, top in (("below_ground", below_ground, 1.0),
                                  ("feet_reach", feet_reach, 1.0),
                                  ("mount_height", mount_height, 10.0)):
@@ -803,8 +804,8 @@ def validate_descriptor(path, header: dict, arrays: dict):
     number("contact_distance", 1e-4, 10.0, 0.02)
     number("contact_fraction", 0.0, 1.0, 0.25)
     number("contact_angle", 1e-6, 90.0, 90.0)
-    if header.get("contact_groups", "off") not in ("off", "main", "all"):
-        bad("contact_groups", f"must be 'off', 'main' or 'all', got "
+    if header.get("contact_groups", "off") not in ("off", "main", "all", "seat"):
+        bad("contact_groups", f"must be 'off', 'main', 'all' or 'seat', got "
                               f"{header.get('contact_groups')!r}")
     ground = header.get("ground")
     if ground is not None:

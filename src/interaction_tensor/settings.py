@@ -126,8 +126,8 @@ class TrainSettings:
         _check(0 <= self.interior_limit <= 1, "interior_limit must be in [0, 1]")
         _check(self.contact_group_points >= 1, "contact_group_points must be at least 1")
         _check(self.contact_link > 0, "contact_link must be positive (metres)")
-        _check(self.contact_groups in ("off", "main", "all"),
-               "contact_groups must be 'off', 'main' or 'all'")
+        _check(self.contact_groups in ("off", "main", "all", "seat"),
+               "contact_groups must be 'off', 'main', 'all' or 'seat'")
         _check(self.contact_distance > 0, "contact_distance must be positive (metres)")
         _check(0 <= self.contact_fraction <= 1, "contact_fraction must be in [0, 1]")
         _check(0 < self.contact_angle <= 90, "contact_angle must be in (0, 90] degrees")

@@ -410,7 +410,10 @@ ACCEPTANCE: dict = {
                     contact=("off", 0.02, 0.1, 90.0),             # 100 %, 71.7 %
                     collision=[(0.01, None)], through=True),      # 12/72 (support under it)
     "riding": dict(threshold=0.05, clearance_limit=0.20, interior_limit=1.0,
-                   contact=("off", 0.02, 0.1, 90.0),              # 83.5 %, 54.0 % (**)
+                   # tuned with contact off (83.5 %, 54.0 % (**)); the seat contact test
+                   # chosen on the labelled set since (2 % of the seat region within 3 cm:
+                   # 74/74 invalid rejected with everything below, 58 without it)
+                   contact=("seat", 0.03, 0.02, 90.0),
                    collision=[(0.01, 0.0)], through=False,        # 11/48: above the seat;
                    straddle={"astride": ((0.12, 0.32), (-0.03, 0.03), (-0.30, 0.02)),
                              "legroom": [((-0.10, 0.20), (0.16, 0.40), (-0.14, 0.02)),
