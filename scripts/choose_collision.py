@@ -69,8 +69,7 @@ from interaction_tensor.clearance import (above_ground, below_ground, feet_gaps_
 from interaction_tensor.scene import prepare_scene
 from interaction_tensor.evaluation import labelled
 from interaction_tensor.evaluation.judge import TESTS
-from interaction_tensor.examples import interactions, validation
-from interaction_tensor.io import load_geometry
+from interaction_tensor.examples import interactions
 
 ABOVE = (None, 0.0, 0.05, 0.10)
 DEPTHS = (0.01, 0.02, 0.05, 0.1, 0.2)
@@ -179,8 +178,7 @@ def main(argv=None) -> int:
     colliders, scenes, examples, rows, examples_of = {}, {}, {}, [], {}
     for n, p in enumerate(poses):
         if p.scene not in colliders:
-            g = (load_geometry(Path(args.shared) / p.scene[7:]) if p.scene.startswith("shared:")
-                 else validation.build_scene(p.scene.split(":", 1)[1]).geometry)
+            g = labelled.scene_geometry(p.scene, args.shared)
             colliders[p.scene] = collision.MeshCollider(g.vertices, g.faces)
             scenes[p.scene] = prepare_scene(g, 0.01, seed=0)
         if p.example not in examples:

@@ -28,8 +28,7 @@ from interaction_tensor import collision
 from interaction_tensor.clearance import through_crossed_poses
 from interaction_tensor.descriptor import through_section_of
 from interaction_tensor.evaluation import labelled
-from interaction_tensor.examples import interactions, validation
-from interaction_tensor.io import load_geometry
+from interaction_tensor.examples import interactions
 from interaction_tensor.scene import prepare_scene
 
 BANDS = (0.0, 0.25, 0.5, 0.75, 1.0)
@@ -59,8 +58,7 @@ def main(argv=None) -> int:
     cases = Counter()
     for p in poses:
         if p.scene not in scenes:
-            g = (load_geometry(Path(args.shared) / p.scene[7:]) if p.scene.startswith("shared:")
-                 else validation.build_scene(p.scene.split(":", 1)[1]).geometry)
+            g = labelled.scene_geometry(p.scene, args.shared)
             scenes[p.scene] = (collision.MeshCollider(g.vertices, g.faces),
                                prepare_scene(g, SPACING, seed=0))
         mesh, scene = scenes[p.scene]

@@ -491,28 +491,33 @@ def load(path=DATA_FILE) -> list:
 
 
 # ------------------------------------------------------------------ judging the judge
+def scene_geometry(scene: str, shared_dir=None):
+    """The Geometry of a labelled pose's ``scene``: ``shared:<path>`` read from
+    ``shared_dir``, ``validation:<name>`` built (:func:`..examples.validation.build_scene`)."""
+    from ..examples import validation
+    from ..io import load_geometry
+
+    if scene.startswith("shared:"):
+        return load_geometry(Path(shared_dir) / scene[7:])
+    return validation.build_scene(scene.split(":", 1)[1]).geometry
+
+
 def judge_accuracy(poses: list, objects_dir=None, shared_dir=None, log=None):
     """Judge every pose; returns (rows per affordance, per-pose verdicts).
 
     A row: affordance, valid_n, valid_right, invalid_n, invalid_right, and the accuracies
     (%) on each class. Poses in the shared scenes are skipped without ``shared_dir``.
     """
-    from ..examples import interactions, validation
-    from ..io import load_geometry
+    from ..examples import interactions
     from .judge import Judge, JudgeScene
 
     judges, scenes, verdicts = {}, {}, []
     for p in poses:
-        if p.scene.startswith("shared:"):
-            if shared_dir is None:
-                continue
-            key = p.scene
-            if key not in scenes:
-                scenes[key] = JudgeScene(load_geometry(Path(shared_dir) / p.scene[7:]))
-        else:
-            key = p.scene
-            if key not in scenes:
-                scenes[key] = JudgeScene(validation.build_scene(p.scene.split(":", 1)[1]).geometry)
+        if p.scene.startswith("shared:") and shared_dir is None:
+            continue
+        key = p.scene
+        if key not in scenes:
+            scenes[key] = JudgeScene(scene_geometry(key, shared_dir))
         if p.example not in judges:
             judges[p.example] = Judge.for_example(interactions.build(p.example, objects_dir))
         v = judges[p.example].judge(scenes[key], np.asarray(p.pose, float))
