@@ -71,7 +71,7 @@ from interaction_tensor.evaluation import labelled
 from interaction_tensor.evaluation.judge import TESTS
 from interaction_tensor.examples import interactions
 
-ABOVE = (None, 0.0, 0.05, 0.10)
+ABOVE = (None, -0.05, 0.0, 0.05, 0.10)
 DEPTHS = (0.01, 0.02, 0.05, 0.1, 0.2)
 GROUND_DEPTHS = (0.01, 0.02, 0.05, 0.1)
 FEET_REACHES = (0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5)
@@ -188,10 +188,10 @@ def main(argv=None) -> int:
             v, f = tensor.query_vertices, tensor.query_faces
             bodies = {}
             for above in ABOVE:
-                faces = collision.faces_above(v, f, None if above is None
-                                              else tensor.reference_point[2] + above)
+                pv, faces = collision.part_above(v, f, None if above is None
+                                                 else tensor.reference_point[2] + above)
                 if len(faces):                  # nothing of a bowl lies above its support
-                    bodies[above] = collision.Body(v, faces)
+                    bodies[above] = collision.Body(pv, faces)
             section = tensor.through_section
             through = collision.Body(*collision.polygon(section)) if len(section) else None
             examples[p.example] = bodies, through, tensor

@@ -116,12 +116,24 @@ class Body:
         return len(self.faces)
 
 
-def faces_above(vertices: np.ndarray, faces: np.ndarray, z: float | None) -> np.ndarray:
-    """The faces whose three vertices lie above height ``z`` (m); all of them for None."""
+#: Longest edge (m) of the triangles a part of a query object is cut into before it is
+#: selected by height (:func:`part_above`): a capsule's long triangles (a shin from knee to
+#: ankle) would otherwise drop out whole. The judge cuts a person into parts the same way.
+PART_EDGE = 0.02
+
+
+def part_above(vertices: np.ndarray, faces: np.ndarray, z: float | None,
+               max_edge: float = PART_EDGE):
+    """The part of a triangle mesh above height ``z`` (m): its triangles cut to edges of at
+    most ``max_edge`` (trimesh's ``subdivide_to_size``), then those whose three vertices lie
+    above ``z``. Returns (vertices, faces); the mesh as it is for ``z`` None."""
+    vertices, faces = np.asarray(vertices, float), np.asarray(faces, np.int64)
     if z is None:
-        return np.asarray(faces)
-    high = np.asarray(vertices)[:, 2] > z
-    return np.asarray(faces)[high[faces].all(axis=1)]
+        return vertices, faces
+    import trimesh
+
+    v, f = trimesh.remesh.subdivide_to_size(vertices, faces, max_edge=max_edge, max_iter=12)
+    return v, f[(v[:, 2] > z)[f].all(axis=1)]
 
 
 def split_faces(vertices: np.ndarray, faces: np.ndarray, mask_vertices: np.ndarray):

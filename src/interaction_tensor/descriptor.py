@@ -302,19 +302,20 @@ class InteractionTensor:
     def collision_bodies(self) -> list:
         """Detection's collision tests as (:class:`~.collision.Body` of the tested query
         triangles in the training frame, depth m), built once; empty when the descriptor has
-        no collision test or no triangles to test (a point-cloud query). A test whose height
-        leaves no triangle is dropped."""
+        no collision test or no triangles to test (a point-cloud query). A test with a height
+        tests the query's triangles cut to 2 cm edges above it (:func:`.collision.part_above`);
+        one whose height leaves no triangle is dropped."""
         if "_collision_bodies" not in self.__dict__:
             bodies = []
             if len(self.query_faces):
-                from .collision import Body, faces_above
+                from .collision import Body, part_above
 
                 for depth, above in self.collision_tests:
-                    faces = faces_above(self.query_vertices, self.query_faces,
-                                        None if above is None
-                                        else self.reference_point[2] + above)
+                    v, faces = part_above(self.query_vertices, self.query_faces,
+                                          None if above is None
+                                          else self.reference_point[2] + above)
                     if len(faces):
-                        bodies.append((Body(self.query_vertices, faces), depth))
+                        bodies.append((Body(v, faces), depth))
             self.__dict__["_collision_bodies"] = bodies
         return self.__dict__["_collision_bodies"]
 

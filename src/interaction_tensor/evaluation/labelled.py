@@ -43,6 +43,10 @@ HIGH_TOP = re.compile(r"counter|island|breakfast bar|workbench|kitchenette")
 #: keeps 2.5 mm from it) by a quarter of a millimetre, short of the judge's loop disk
 #: (3.5 mm inside the wire): a graze, with nothing through the hook.
 GRAZE = 0.00275
+#: How far (m) behind a seat's front edge a seated person's calves are in the "knees behind
+#: the seat's front edge" negatives: the tops of the shins 3 cm into the seat's top at the
+#: knees, more than the 2 cm the judge lets a person's body into the scene.
+KNEE_BEHIND = 0.03
 #: The example judged for each affordance in the labelled set.
 EXAMPLE_OF = {"placing": "placing-bowl", "filling": "filling-mug",
               "hanging": "hanging-hanger", "sitting": "sitting-human",
@@ -117,6 +121,34 @@ def edge_distance(points_tree, points, start, direction, z, step=0.01, reach=1.5
                       & (np.hypot(q[:, 0] - p[0], q[:, 1] - p[1]) <= 0.025)):
             return float(t)
     return float(reach)
+
+
+def _knee_offset(example) -> float:
+    """How far (m) a seated person's knees are from its mid-plane: the median lateral offset
+    of its surface within 5 cm below the seat and ahead of it (the tops of the shins)."""
+    from ..examples.interactions import surface_points
+
+    q = surface_points(example.query, 20000)
+    s = example.support_point
+    band = q[(q[:, 2] < s[2]) & (q[:, 2] > s[2] - 0.05) & (q[:, 0] > s[0] + 0.1)]
+    return float(np.median(np.abs(band[:, 1] - s[1])))
+
+
+def _last_sample(points_tree, points, start, direction, reach: float) -> float:
+    """Distance (m) from ``start`` along the horizontal ``direction`` to the farthest scene
+    sample within 2 cm of that line horizontally and 1 cm of ``start``'s height, no farther
+    than ``reach`` (an :func:`edge_distance`, which overshoots the edge by up to 2.5 cm):
+    where the surface really ends, to the samples' spacing."""
+    d = np.asarray(direction, float)[:2]
+    d = d / np.linalg.norm(d)
+    s = np.asarray(start, float)
+    mid = np.r_[s[:2] + 0.5 * reach * d, s[2]]
+    near = np.asarray(points_tree.query_ball_point(mid, 0.5 * reach + 0.03), np.int64)
+    q = points[near] - s
+    along = q[:, :2] @ d
+    across = np.abs(q[:, 0] * d[1] - q[:, 1] * d[0])
+    on = (along >= 0) & (along <= reach) & (across <= 0.02) & (np.abs(q[:, 2]) <= 0.01)
+    return float(along[on].max()) if on.any() else 0.0
 
 
 def _feet_samples(example) -> np.ndarray:
@@ -197,6 +229,7 @@ def _validation_poses(ex, name, vs, jscene) -> list:
 
     if aff == "sitting":
         back, calves = seated_reach(ex)
+        knee = _knee_offset(ex)
         for i, s in enumerate(by["seat"]):
             a = facing_angle(ex, s.facing)
             f = np.r_[s.facing, 0.0]
@@ -212,6 +245,17 @@ def _validation_poses(ex, name, vs, jscene) -> list:
                 # the back 3.5 cm into the backrest, the legs as free as on the seat
                 add(site_pose(ex, s.point, a, (fwd - gap - 0.035) * f), False,
                     "leaning 3.5 cm into the backrest", s.note)
+            # moved back until the calves are KNEE_BEHIND behind the seat's front edge: the
+            # tops of the shins through the seat's top at the knees (the published scenes'
+            # counters, tables and TV units, sat on at their edge), the back still clear of
+            # any backrest
+            side = np.r_[-f[1], f[0], 0.0]
+            edge = min(_last_sample(tree, jscene.points, s.point + k * knee * side, f, front)
+                       for k in (1, -1))              # under each knee (a round seat)
+            back_to = edge - KNEE_BEHIND - calves
+            if not math.isfinite(s.width) or s.width + back_to - back >= 0.0:
+                add(site_pose(ex, s.point, a, back_to * f), False,
+                    f"knees {KNEE_BEHIND * 100:.0f} cm behind the seat's front edge", s.note)
             add(site_pose(ex, s.point, a, fwd * f + [0, 0, -0.04]), False,
                 "sunk 4 cm into the seat", s.note)
             if i % 2 == 0:
