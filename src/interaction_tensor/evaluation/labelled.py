@@ -428,6 +428,16 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
                               "seat with the feet on a step 20 cm above the floor" if low
                               else "on top of a tall unit, the feet on a step 1.2 m above the "
                               "floor", note))
+        # people on the front edge of a bench with a footstool pushed against it: the knees
+        # over the stool's top, the shins and feet 20-30 cm inside it (the published
+        # scenes' people on a desk with the legs down through its drawer unit; only the
+        # legs cross the scene, which the judge allows 10 cm)
+        for point, angle, note in validation.footstool_bench_seats():
+            d = np.array([math.cos(angle), math.sin(angle), 0.0])
+            out.append(_entry(ex, "validation:judge_traps",
+                              site_pose(ex, point, angle, (0.01 - calves) * d), False,
+                              "on a bench's edge, the legs through a footstool against it",
+                              note))
         # people on the open edges of the traps' floor slab, the legs hanging below it into
         # the void past the scan (fooled the judge in kitchen4: nothing under the feet, and
         # the feet 42 cm below the lowest thing scanned around)

@@ -399,9 +399,10 @@ ACCEPTANCE: dict = {
                     collision=[(0.01, None)], through=False),     # 30/76 invalid rejected
     "sitting": dict(threshold=0.11, clearance_limit=0.10, interior_limit=0.02,
                     contact=("main", 0.10, 0.75, 90.0),           # 91.5 %, 78.1 % (***)
-                    collision=[(0.01, -0.05)],                    # 120/165: 5 cm below the
-                    through=False, below_ground=0.05,             # seat and up, 1 cm;
-                    feet_reach=0.25),                             # ground 124, feet 152/165
+                    collision=[(0.05, None), (0.01, -0.05)],      # 122/167: the whole body
+                    through=False, below_ground=0.05,             # 5 cm, from 5 cm below the
+                    feet_reach=0.25),                             # seat 1 cm; ground 126,
+                                                                  # feet 154/167
     "hanging": dict(threshold=0.03, clearance_limit=0.10, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),             # 100 %, 4.3 % (**)
                     collision=[(0.01, None)], through=True,       # 110/125, with the

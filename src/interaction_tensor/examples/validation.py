@@ -237,12 +237,20 @@ def _judge_traps():
         k.box((-0.4, -0.5, 0.0), (0.4, 0.5, step))
         k.box((0.0, -0.5, step), (0.4, 0.5, step + 0.45))
         units.append(k.piece(name, xy, 0))
+    # a bench with a footstool pushed against its front (a sofa with the coffee table
+    # against it): a person on the bench's edge has the knees over the stool's top and the
+    # shins and feet inside the stool (:func:`footstool_bench_seats`)
+    (bx0, bx1), (by0, by1), bench_top = FOOTSTOOL_BENCH
+    k = F._Kit()
+    k.box((bx0, by0, 0.0), (bx1, by1, bench_top))
+    k.box((bx0, by1, 0.0), (bx1, by1 + 0.3, 0.3))
+    bench = k.piece("bench with a footstool against it", (0.0, 0.0), 0)
     walls = []
     for name, x0, y0, height, thick in WALL_TOPS:
         k = F._Kit()
         k.box((-thick / 2, -0.6, 0.0), (thick / 2, 0.6, height))
         walls.append(k.piece(name, (x0, y0), 0))
-    return _shell(TRAPS_SIZE), [table, counter] + units + walls
+    return _shell(TRAPS_SIZE), [table, counter, bench] + units + walls
 
 
 def _floorless_traps():
@@ -278,6 +286,19 @@ TRAPS_SIZE = (5.6, 3.4)
 WALL_TOPS = (("low wall", 4.9, 0.9, 0.9, 0.12), ("tall partition", 4.9, 2.5, 2.4, 0.10),
              ("mid partition", 4.2, 1.7, 1.6, 0.10), ("chest-high partition", 0.45, 1.7, 1.4,
                                                       0.10))
+
+
+#: The judge traps' bench (x range, y range, top height; m), its front at the larger y, with
+#: a footstool 0.3 m high and 0.3 m deep against that front.
+FOOTSTOOL_BENCH = ((2.0, 2.7), (0.35, 0.75), 0.45)
+
+
+def footstool_bench_seats() -> list:
+    """Where a person sits on the front edge of :func:`_judge_traps`'s bench, facing +y over
+    the footstool: [(point on the bench's front edge (3,), facing angle (radians), note)]."""
+    (x0, x1), (_, y1), top = FOOTSTOOL_BENCH
+    return [((x, y1, top), math.pi / 2, f"bench with a footstool, x {x:.2f}")
+            for x in (x0 + 0.2, x1 - 0.2)]
 
 
 def wall_top_rides() -> list:
