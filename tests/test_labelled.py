@@ -243,3 +243,24 @@ def test_a_rider_on_a_tall_partition_is_out_of_reach_and_one_on_a_low_wall_rides
             assert len(v.reasons) == 1 and v.reasons[0].endswith("out of reach to ride")
             assert v.seat_height > 1.4 > judge.settings.seat_above_ground
             assert lenient.judge(scene, np.asarray(p.pose)).valid
+
+
+def test_knees_behind_a_seats_front_edge_and_legs_through_a_footstool_fail_on_the_body(
+        poses, sitting_traps):
+    """The knees negatives cross the seat's top with the tops of the shins (the core of the
+    person, 2 cm allowed); the footstool negatives cross the scene with the legs only (10 cm
+    allowed)."""
+    knees = [p for p in poses if p.case.startswith("knees 3 cm behind")]
+    stool = [p for p in poses if p.case.startswith("on a bench's edge, the legs through")]
+    assert len(knees) >= 20 and len(stool) >= 2
+    assert not any(p.valid for p in knees + stool)
+    ex, scene, judge = sitting_traps
+    for p in stool:
+        pose = np.asarray(p.pose)
+        v = judge.judge(scene, pose)
+        assert set(v.reasons) == {"left leg penetrates the scene deeply",
+                                  "right leg penetrates the scene deeply"}
+        assert v.penetration == 0.0                       # the core is free
+    rows, verdicts = labelled.judge_accuracy(knees[:4], _objects(), SHARED_DATA)
+    for _, v in verdicts:
+        assert "body penetrates the scene deeply" in v.reasons
