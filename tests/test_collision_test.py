@@ -393,6 +393,22 @@ def test_part_above_cuts_long_triangles_so_a_part_keeps_what_lies_above():
     assert np.array_equal(same_f, f) and np.array_equal(same_v, v)
 
 
+def test_part_above_cuts_only_the_crossing_triangles_and_keeps_the_same_surface():
+    """Cutting only the triangles that cross the height keeps the surface that cutting all
+    of them keeps (a triangle is cut on its own edges), with fewer triangles."""
+    import trimesh
+
+    q = interactions.build("sitting-human").query
+    z = 0.40
+    v, f = trimesh.remesh.subdivide_to_size(q.vertices, q.faces, max_edge=collision.PART_EDGE,
+                                            max_iter=12)
+    f = f[(v[:, 2] > z)[f].all(axis=1)]
+    pv, pf = collision.part_above(q.vertices, q.faces, z)
+    area = trimesh.triangles.area
+    assert area(pv[pf]).sum() == pytest.approx(area(v[f]).sum(), rel=1e-9)
+    assert len(pf) < len(f) and (pv[pf][:, :, 2] > z).all()
+
+
 @pytest.mark.parametrize("behind, free", [(-0.01, True), (0.03, False)])
 def test_sitting_collision_test_rejects_knees_through_a_seats_front_edge(behind, free):
     """Sitting's core test (the person from 5 cm below the seat up, 1 cm): sat with the

@@ -126,14 +126,25 @@ def part_above(vertices: np.ndarray, faces: np.ndarray, z: float | None,
                max_edge: float = PART_EDGE):
     """The part of a triangle mesh above height ``z`` (m): its triangles cut to edges of at
     most ``max_edge`` (trimesh's ``subdivide_to_size``), then those whose three vertices lie
-    above ``z``. Returns (vertices, faces); the mesh as it is for ``z`` None."""
+    above ``z``. Returns (vertices, faces); the mesh as it is for ``z`` None.
+
+    Only the triangles that cross ``z`` are cut (a triangle is cut on its own edges alone, so
+    the pieces kept are those of cutting them all); the ones wholly above are kept whole,
+    which keeps the part's BVH, and a collision test with it, small."""
     vertices, faces = np.asarray(vertices, float), np.asarray(faces, np.int64)
     if z is None:
         return vertices, faces
     import trimesh
 
-    v, f = trimesh.remesh.subdivide_to_size(vertices, faces, max_edge=max_edge, max_iter=12)
-    return v, f[(v[:, 2] > z)[f].all(axis=1)]
+    high = (vertices[:, 2] > z)[faces]
+    whole = faces[high.all(axis=1)]
+    crossing = faces[high.any(axis=1) & ~high.all(axis=1)]
+    if not len(crossing):
+        return vertices, whole
+    v, f = trimesh.remesh.subdivide_to_size(vertices, crossing, max_edge=max_edge,
+                                            max_iter=12)
+    pieces = f[(v[:, 2] > z)[f].all(axis=1)]
+    return np.vstack([vertices, v]), np.vstack([whole, pieces + len(vertices)])
 
 
 def split_faces(vertices: np.ndarray, faces: np.ndarray, mask_vertices: np.ndarray):
