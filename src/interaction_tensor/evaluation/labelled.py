@@ -456,6 +456,12 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
                               site_pose(ex, point, angle),
                               low, "astride a low wall's top" if low else
                               f"astride a {height:g} m partition's top, out of reach", note))
+        # riders on a bench whose front rises 3 cm 10-12 cm ahead of the seat, as a saddle
+        # rises to a tank: the thighs a little into the rise, which the judge allows the
+        # legs (the published scenes' riders on a desk's or a counter's raised edge)
+        for point, angle, note in validation.saddle_rides():
+            out.append(_entry(ex, "validation:judge_traps", site_pose(ex, point, angle), True,
+                              "astride a bench with a raised front, thighs on the rise", note))
         log(f"judge_traps: {len(out)} poses so far")
         # a hook round an office chair's star-base leg in a scan without its floor: the
         # hanger hangs through where the floor is (fooled the judge in office-desk6); and

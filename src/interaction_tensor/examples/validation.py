@@ -245,12 +245,19 @@ def _judge_traps():
     k.box((bx0, by0, 0.0), (bx1, by1, bench_top))
     k.box((bx0, by1, 0.0), (bx1, by1 + 0.3, 0.3))
     bench = k.piece("bench with a footstool against it", (0.0, 0.0), 0)
+    # a bench whose front part rises 3 cm, as a saddle rises to a tank: a rider on the low
+    # part has the thighs a little into the rise, as on a motorbike (:func:`saddle_rides`)
+    (sx0, sx1), (sy0, sy1), saddle_top = SADDLE_BENCH
+    k = F._Kit()
+    k.box((sx0, sy0, 0.0), (sx1, sy1, saddle_top))
+    k.box((SADDLE_RISE_X, sy0, saddle_top), (sx1, sy1, saddle_top + 0.03))
+    saddle = k.piece("bench with a raised front", (0.0, 0.0), 0)
     walls = []
     for name, x0, y0, height, thick in WALL_TOPS:
         k = F._Kit()
         k.box((-thick / 2, -0.6, 0.0), (thick / 2, 0.6, height))
         walls.append(k.piece(name, (x0, y0), 0))
-    return _shell(TRAPS_SIZE), [table, counter, bench] + units + walls
+    return _shell(TRAPS_SIZE), [table, counter, bench, saddle] + units + walls
 
 
 def _floorless_traps():
@@ -291,6 +298,20 @@ WALL_TOPS = (("low wall", 4.9, 0.9, 0.9, 0.12), ("tall partition", 4.9, 2.5, 2.4
 #: The judge traps' bench (x range, y range, top height; m), its front at the larger y, with
 #: a footstool 0.3 m high and 0.3 m deep against that front.
 FOOTSTOOL_BENCH = ((2.0, 2.7), (0.35, 0.75), 0.45)
+
+
+#: The judge traps' bench with a raised front (x range, y range, top height; m): from
+#: ``SADDLE_RISE_X`` on, its top is 3 cm higher.
+SADDLE_BENCH = ((3.0, 3.9), (2.75, 3.05), 0.5)
+SADDLE_RISE_X = 3.4
+
+
+def saddle_rides() -> list:
+    """Where a rider sits astride the low part of :func:`_judge_traps`'s bench with a raised
+    front, facing the rise: [(seat point (3,), facing angle (radians), note)]."""
+    (x0, _), (y0, y1), top = SADDLE_BENCH
+    return [((x, (y0 + y1) / 2, top), 0.0, f"bench with a raised front, rise {SADDLE_RISE_X - x:.2f} m ahead")
+            for x in (SADDLE_RISE_X - 0.10, SADDLE_RISE_X - 0.12)]
 
 
 def footstool_bench_seats() -> list:
