@@ -458,7 +458,8 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
                               f"astride a {height:g} m partition's top, out of reach", note))
         # riders on a bench whose front rises 3 cm 10-12 cm ahead of the seat, as a saddle
         # rises to a tank: the thighs a little into the rise, which the judge allows the
-        # legs (the published scenes' riders on a desk's or a counter's raised edge)
+        # legs (two judge-valid published riders, office-desk1's and office-desk4's, press
+        # their thighs 1-5 cm into a support rising ahead of the seat)
         for point, angle, note in validation.saddle_rides():
             out.append(_entry(ex, "validation:judge_traps", site_pose(ex, point, angle), True,
                               "astride a bench with a raised front, thighs on the rise", note))

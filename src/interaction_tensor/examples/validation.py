@@ -310,7 +310,8 @@ def saddle_rides() -> list:
     """Where a rider sits astride the low part of :func:`_judge_traps`'s bench with a raised
     front, facing the rise: [(seat point (3,), facing angle (radians), note)]."""
     (x0, _), (y0, y1), top = SADDLE_BENCH
-    return [((x, (y0 + y1) / 2, top), 0.0, f"bench with a raised front, rise {SADDLE_RISE_X - x:.2f} m ahead")
+    return [((x, (y0 + y1) / 2, top), 0.0,
+             f"bench with a raised front, rise {SADDLE_RISE_X - x:.2f} m ahead")
             for x in (SADDLE_RISE_X - 0.10, SADDLE_RISE_X - 0.12)]
 
 
