@@ -60,6 +60,24 @@ def test_detection_is_deterministic(corner_tensor):
     np.testing.assert_array_equal(runs[0].candidate_indices, runs[1].candidate_indices)
 
 
+def test_candidates_without_scoring_are_detections_candidates(corner_tensor):
+    """The baselines take their candidates from detect.candidates when iT does not run:
+    the same seeded draw and normal filter as a detection, for either N_aff."""
+    from dataclasses import replace
+
+    from interaction_tensor.detect import candidates
+
+    scene_geometry, _ = moved_corner_scene(0.3, np.array([0.0, 0.0, 0.0]))
+    scene = it.prepare_scene(scene_geometry, 0.01, seed=5)
+    down = replace(corner_tensor, affordance_normal=-np.asarray(corner_tensor.affordance_normal))
+    for tensor in (corner_tensor, down):
+        for frac, seed in ((0.1, 9), (0.5, 2)):
+            s = it.DetectSettings(sample_fraction=frac, seed=seed, top_k=0)
+            c = candidates(scene, tensor, s)
+            np.testing.assert_array_equal(c, it.detect(scene, tensor, s).candidate_indices)
+            assert 0 < len(c) < frac * len(scene) + 1
+
+
 @pytest.fixture(scope="module")
 def scored_setup(corner_tensor):
     scene_geometry, _ = moved_corner_scene(np.pi / 2, np.array([0.5, 0.5, 0.0]))

@@ -118,6 +118,17 @@ def test_evaluate_merge_equals_one_run(tmp_path, capsys):
                                                                  ["iT-weighted"]]
     capsys.readouterr()
 
+    # a baseline run alone takes the candidates iT would have scored (detect.candidates,
+    # no detection): the same poses, scores and verdicts as beside iT
+    naive_only = [v if v != "iT-weighted,Naive" else "Naive" for v in common]
+    assert main(["evaluate", "--scenes", str(s1), str(s2), "-o", str(tmp_path / "nv"),
+                 *naive_only, "--no-judge-check"]) == 0
+    with open(tmp_path / "nv" / "judgements.csv") as fh:
+        alone = list(csv.DictReader(fh))
+    with open(tmp_path / "ab" / "judgements.csv") as fh:
+        beside = [r for r in csv.DictReader(fh) if r["method"] == "Naive"]
+    assert alone == beside and len(alone) >= 10
+
     # a merge is itself a part: (a + b) + c gives what a + b + c gives, its parts listed
     s3 = shared_file("scenes/office-desk2.ply")
     assert main(["evaluate", "--scenes", str(s3), "-o", str(tmp_path / "c3"), *common]) == 0

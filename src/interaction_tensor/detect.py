@@ -614,6 +614,21 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
     return det
 
 
+def _filtered(scene: Scene, tensor, settings: DetectSettings, test_idx) -> np.ndarray:
+    """The test points whose normal passes the tensor's N_aff filter."""
+    ok = candidate_mask(scene.normals[test_idx], tensor.affordance_normal,
+                        settings.normal_tolerance_deg, settings.oriented_normals)
+    return test_idx[ok]
+
+
+def candidates(scene: Scene, tensor, settings: DetectSettings | None = None) -> np.ndarray:
+    """The candidates :func:`detect` would score for ``tensor``, without scoring them: the
+    seeded draw of test points, then the normal filter (scene indices, sorted). The
+    baselines of ``itensor evaluate`` take theirs from here when iT does not run."""
+    settings = (settings or DetectSettings()).for_scene(scene)
+    return _filtered(scene, tensor, settings, _test_points(scene, settings))
+
+
 def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = None,
                 progress: bool = False, test_indices=None) -> list:
     """Detect several interactions in one pass over a scene.
@@ -635,9 +650,7 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     n_o = settings.n_orientations
     cands, jobs, pp_list, po_list = [], [], [], []
     for tensor in tensors:
-        ok = candidate_mask(scene.normals[test_idx], tensor.affordance_normal,
-                            settings.normal_tolerance_deg, settings.oriented_normals)
-        cand = test_idx[ok]
+        cand = _filtered(scene, tensor, settings, test_idx)
         # compact pair arrays (a 2 M-point scene at 30 % has millions of pairs): int32 point
         # and int16 orientation indices, widened where a kernel needs int64
         pp = np.repeat(cand.astype(np.int32 if len(scene) < 2 ** 31 else np.int64), n_o)

@@ -148,7 +148,7 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
     from ..baselines.bisector_icp import bisector_baseline
     from ..baselines.common import capped_candidates
     from ..baselines.naive import naive
-    from ..detect import rank_pairs
+    from ..detect import candidates, rank_pairs
     from ..examples import interactions
     from .judge import Judge, JudgeScene, JudgeSettings
 
@@ -238,10 +238,9 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                     score = np.zeros(len(acc))
                     score[top], score[bottom] = top_s, bot_s
                 else:
-                    if cand is None:
-                        det = it.detect(scene, tensor, it.DetectSettings(
+                    if cand is None:     # iT did not run: the candidates it would score
+                        cand = candidates(scene, tensor, it.DetectSettings(
                             sample_fraction=frac, top_k=0, seed=st.seed))
-                        cand = det.candidate_indices
                     cap = st.max_candidates if m == "Naive" else st.max_bs_candidates
                     sub = capped_candidates(cand, cap, st.seed)
                     fn = naive if m == "Naive" else bisector_baseline
