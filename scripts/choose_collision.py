@@ -174,7 +174,7 @@ def main(argv=None) -> int:
     ap.add_argument("-o", "--out", default="docs/results/collision")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
-    poses = labelled.load()
+    poses = labelled.upright(labelled.load())   # detection's poses are upright
     colliders, scenes, examples, rows, examples_of = {}, {}, {}, [], {}
     for n, p in enumerate(poses):
         if p.scene not in colliders:

@@ -42,7 +42,8 @@ def main(argv=None) -> int:
     ap.add_argument("-o", "--out", default="docs/results/collision")
     args = ap.parse_args(argv)
     t0 = time.perf_counter()
-    poses = [p for p in labelled.load() if p.affordance == "hanging"]
+    # detection only proposes upright poses: the tilted negatives are the judge's
+    poses = [p for p in labelled.upright(labelled.load()) if p.affordance == "hanging"]
     tensors = {}
     for name in sorted({p.example for p in poses}):
         ex = interactions.build(name, args.objects, 0)

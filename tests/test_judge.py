@@ -115,6 +115,38 @@ def test_hanger_off_the_rail_is_invalid():
     assert not v.valid and v.penetration > 0.01, v
 
 
+def test_a_hanger_turned_level_on_its_rail_is_not_upright():
+    """Turned 90 degrees about the rail, the hook still round it, the hanger passes every
+    test but the upright one (gravity swings it down); a few degrees of tilt are allowed."""
+    from dataclasses import replace
+
+    from interaction_tensor.evaluation.labelled import level_on_support
+
+    ex = interactions.build("hanging-hanger")
+    judge = Judge.for_example(ex)
+    scene = JudgeScene(ex.scene_object)
+    for angle in (np.pi / 2, -np.pi / 2):
+        pose = level_on_support(ex, np.eye(4), angle)
+        v = judge.judge(scene, pose)
+        assert not v.valid and abs(v.tilt - 90.0) < 1e-6
+        assert v.reasons == ["tilted 90 degrees from upright"], v.reasons
+        blind = Judge.for_example(ex)
+        blind.settings = replace(blind.settings, max_tilt=180.0)
+        assert blind.judge(scene, pose).valid            # what fooled the judge without it
+    small = judge.judge(scene, level_on_support(ex, np.eye(4), np.radians(5.0)))
+    assert small.valid and 4.9 < small.tilt < 5.1, small.reasons
+
+
+def test_a_bowl_tilted_on_the_table_is_not_upright(bowl_judge, kitchen_table):
+    from scipy.spatial.transform import Rotation
+
+    tilt = np.eye(4)
+    tilt[:3, :3] = Rotation.from_euler("x", 30, degrees=True).as_matrix()
+    v = bowl_judge.judge(kitchen_table, on_table(2.2, 1.0) @ tilt)
+    assert not v.valid and any("tilted 30 degrees" in r for r in v.reasons), v.reasons
+    assert bowl_judge.judge(kitchen_table, on_table(2.2, 1.0)).tilt == 0.0
+
+
 def test_hanger_through_a_table_top_is_invalid():
     """The hook's inside top on a table top (where a detector's test point would put it):
     the hanger's rods go through the top, however thin they are."""

@@ -44,7 +44,8 @@ def test_the_set_has_20_valid_and_20_invalid_poses_per_affordance(poses):
     for needle in ("hook on a flat top", "sunk 10 cm into the seat", "half off the edge",
                    "on a top with no tap above", "hovering", "through the wall",
                    "under a bar, not in a basin", "star base", "feet in the air",
-                   "flat against the wall"):
+                   "flat against the wall", "turned level on its support",
+                   "lying flat on the floor"):
         assert any(needle in c for c in cases), needle
 
 
@@ -82,7 +83,7 @@ def test_a_hook_on_a_star_base_hangs_below_the_floor_line_of_a_floorless_scan(po
     traps = [p for p in poses if p.scene == "validation:floorless_traps"]
     judge = Judge.for_example(interactions.build("hanging-hanger", _objects()))
     scene = JudgeScene(validation.build_scene("floorless_traps").geometry)
-    hooks = [p for p in traps if not p.valid]
+    hooks = [p for p in traps if not p.valid and "star base" in p.case]
     rails = [p for p in traps if p.valid]
     assert len(hooks) == 5 and len(rails) >= 3
     for p in hooks:

@@ -91,6 +91,16 @@ Tests, by affordance (``tests`` in :data:`TESTS`):
    horse (1.05-1.35 m), not the top of a 2.4 m wall or partition with the feet dangling a
    metre and more above the floor.
 
+10. **Upright** (all). The example is posed under gravity: its query object's vertical
+   (+Z of the training frame) stays within ``max_tilt`` = 15 degrees of the scene's +Z. A
+   hanger hangs with the hook's plane vertical, a bowl rests level, a person sits upright.
+   iT's poses only turn about the vertical, but a baseline's ICP may tilt the object: the
+   Naive baseline laid hangers flat on the floor with the hook round a cabinet's plinth or
+   leg, which passed every other test (the hook's contact, something through it, above the
+   ground); a hanger turned level on its rail, the hook still round the rail, passes them
+   too. The tolerance covers ICP's small tilts of resting objects (Naive's valid placings:
+   median 4 degrees) and floors and tops that are not quite level.
+
 A pose is valid when every test of its affordance passes. :class:`Verdict` keeps each measured
 value, so that a table can show why a pose failed.
 """
@@ -107,11 +117,11 @@ from .. import collision
 
 #: The tests of each affordance (module docstring).
 TESTS = {
-    "placing": ("penetration", "contact", "support"),
-    "filling": ("penetration", "contact", "support", "overhead", "basin"),
-    "hanging": ("penetration", "contact", "loop", "ground"),
-    "sitting": ("penetration", "contact", "support", "feet"),
-    "riding": ("penetration", "contact", "astride", "legroom", "mount"),
+    "placing": ("upright", "penetration", "contact", "support"),
+    "filling": ("upright", "penetration", "contact", "support", "overhead", "basin"),
+    "hanging": ("upright", "penetration", "contact", "loop", "ground"),
+    "sitting": ("upright", "penetration", "contact", "support", "feet"),
+    "riding": ("upright", "penetration", "contact", "astride", "legroom", "mount"),
 }
 #: Affordances whose query is a container, tested as its convex hull.
 HULL = ("placing", "filling")
@@ -166,6 +176,7 @@ class JudgeSettings:
     legroom_along: tuple = (-0.10, 0.20)
     legroom_below: tuple = (0.14, 0.02)        # (below, above) the seat
     seat_above_ground: float = 1.3
+    max_tilt: float = 15.0                     # degrees
     seed: int = 0
 
 
@@ -190,6 +201,7 @@ class Verdict:
     astride: bool | None = None
     legroom: bool | None = None
     seat_height: float | None = None
+    tilt: float | None = None
     reasons: list = field(default_factory=list)
 
     def to_dict(self) -> dict:
@@ -200,7 +212,7 @@ class Verdict:
                 "overhead": self.overhead, "basin_sectors": self.basin, "loop": self.loop,
                 "feet_gap_m": r(self.feet_gap), "below_ground_m": r(self.below_ground),
                 "astride": self.astride, "legroom": self.legroom,
-                "seat_height_m": r(self.seat_height),
+                "seat_height_m": r(self.seat_height), "tilt_deg": r(self.tilt, 2),
                 "reasons": list(self.reasons)}
 
 
@@ -384,6 +396,10 @@ class Judge:
 
         com = moved(self.com)
         reasons = []
+        # the angle between the object's own vertical and the scene's
+        tilt = float(np.degrees(np.arccos(np.clip(rot[2, 2], -1.0, 1.0))))
+        if "upright" in self.tests and tilt > st.max_tilt:
+            reasons.append(f"tilted {tilt:.0f} degrees from upright")
         pen = 0.0
         for body, allowed, name in self.bodies:
             depth = scene.collider.separation(body, pose, limit=allowed)
@@ -401,6 +417,7 @@ class Judge:
             reasons.append(f"main contact only {contact * 100:.0f} % touching")
 
         verdict = Verdict(False, pen, contact)
+        verdict.tilt = tilt
         near = np.asarray(scene.tree.query_ball_point(com, self.radius + 2 * st.spacing),
                           np.int64)
         local = scene.points[near]

@@ -479,13 +479,42 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
             out.append(_entry(ex, "validation:floorless_traps", site_pose(ex, s.point, a), True,
                               "hook over a rail in a floorless scan", s.note))
         log(f"floorless_traps: {len(out)} poses so far")
+    if scenes is None:
+        # hangers turned level on their support, the hook still round it (the judge's upright
+        # test: gravity swings a hanger down; nothing else in the judge sees it)
+        ex = examples["hanging"]
+        hangs = [p for p in out if p.affordance == "hanging" and p.valid
+                 and p.scene.startswith("validation:")]
+        for i, p in enumerate(hangs):
+            out.append(_entry(ex, p.scene, level_on_support(ex, np.asarray(p.pose, float),
+                                                            (-1) ** i * math.pi / 2),
+                              False, "turned level on its support, the hook still round it",
+                              p.note))
+        log(f"level hangers: {len(out)} poses so far")
     if shared_dir is not None:
         for aff, scene, point, angle, valid, case, note in HAND_POSED:
             ex = examples[aff]
             shift = (0.0, 0.0, 0.0)
             out.append(_entry(ex, f"shared:{scene}", site_pose(ex, point, angle, shift), valid,
                               case, note))
+        for aff, scene, pose, valid, case, note in HAND_POSED_POSES:
+            out.append(_entry(examples[aff], f"shared:{scene}", pose, valid, case, note))
     return out
+
+
+def level_on_support(example, pose, angle: float, below: float = 0.01) -> np.ndarray:
+    """A hanging pose turned by ``angle`` (radians) about the support: the line along the
+    hook's loop axis ``below`` m under the example's support point (about a rail's or peg's
+    axis), so that the hook stays round the support while the hanger leaves the vertical."""
+    from scipy.spatial.transform import Rotation
+
+    rot = pose[:3, :3]
+    axis = rot @ np.asarray(example.loop[2], float)
+    centre = rot @ (np.asarray(example.support_point, float) - [0.0, 0.0, below]) + pose[:3, 3]
+    turn = np.eye(4)
+    turn[:3, :3] = Rotation.from_rotvec(axis / np.linalg.norm(axis) * angle).as_matrix()
+    turn[:3, 3] = centre - turn[:3, :3] @ centre
+    return turn @ pose
 
 
 #: Hand-posed cases in the published scenes: (affordance, scene file under the shared data
@@ -525,6 +554,27 @@ HAND_POSED: list = [
 ]
 
 
+#: Hand-labelled poses in the published scenes given whole (affordance, scene, 4x4 pose,
+#: valid, case, note): the Naive baseline's hangers of 2026-11-27 that lay flat, tilted 90
+#: degrees, with the hook round something low, which the judge passed before it asked for an
+#: upright pose (drawn from four sides and labelled by eye; Naive's top 5).
+HAND_POSED_POSES: list = [
+    ("hanging", "scenes/kitchen1.ply",
+     [[0.50517, 0.001467, -0.863019, 9.70808], [-0.863018, 0.003203, -0.505164, 9.65082],
+      [0.002023, 0.999994, 0.002884, -0.004599], [0.0, 0.0, 0.0, 1.0]], False,
+     "lying flat on the floor, the hook round a low edge", "kitchen1 cabinet plinth (Naive #4)"),
+    ("hanging", "scenes/living-room1.ply",
+     [[-0.124931, -0.002854, 0.992161, -0.251713], [0.992164, -0.002259, 0.124925, 0.292142],
+      [0.001885, 0.999993, 0.003114, -0.004857], [0.0, 0.0, 0.0, 1.0]], False,
+     "lying flat on the floor, the hook round a low edge", "living-room1 wall's foot (Naive #2)"),
+    ("hanging", "scenes/office-desk4.ply",
+     [[0.968734, -0.001197, 0.248099, 3.78702], [-0.2481, -0.000894, 0.968734, 0.172082],
+      [-0.000937, -0.999999, -0.001163, 0.698249], [0.0, 0.0, 0.0, 1.0]], False,
+     "lying flat on a desk top, the hook round an object on it",
+     "office-desk4 desk top (Naive #3)"),
+]
+
+
 # ------------------------------------------------------------------ files
 def save(poses: list, path=DATA_FILE, meta: dict | None = None) -> Path:
     """Write the set as JSON (versioned)."""
@@ -549,6 +599,15 @@ def load(path=DATA_FILE) -> list:
     if doc.get("format") != FORMAT or doc.get("format_version") != FORMAT_VERSION:
         raise InputError(path, "not a labelled-poses file of a version this code reads")
     return [LabelledPose(**p) for p in doc["poses"]]
+
+
+def upright(poses: list, tolerance: float = 1.0) -> list:
+    """The poses whose object keeps its vertical (within ``tolerance`` degrees): those
+    detection can propose, as it only turns an example about +Z. The scripts that choose
+    detection's tests on the labelled set leave the tilted negatives out, which only the
+    judge's upright test is for."""
+    return [p for p in poses
+            if np.degrees(np.arccos(np.clip(p.pose[2][2], -1.0, 1.0))) <= tolerance]
 
 
 # ------------------------------------------------------------------ judging the judge
