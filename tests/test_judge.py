@@ -196,6 +196,29 @@ def test_separation_measures_how_deep_a_box_is_in_a_slab():
     assert slab.separation(rod, np.eye(4)) == np.inf                  # a wire through it
 
 
+def test_separation_in_a_slot_tries_the_short_moves_before_the_limit():
+    """A cube 1 mm into a counter, with a board 6 mm above its top and walls 5.7 mm from its
+    sides: moves of 2 and 5 mm free it, a move of 1 cm in any of the 26 directions hits the
+    board or a wall or stays in the counter. With a 1 cm limit it is 2 mm deep, not "deep"."""
+    from interaction_tensor import collision
+
+    parts = [collision.box((-1, -1, -0.1), (1, 1, 0.0)),            # the counter
+             collision.box((-1, -1, 0.105), (1, 1, 0.2)),           # a board above
+             collision.box((-1, -1, 0.0), (-0.0557, 1, 0.105)),     # walls all round
+             collision.box((0.0557, -1, 0.0), (1, 1, 0.105)),
+             collision.box((-1, -1, 0.0), (1, -0.0557, 0.105)),
+             collision.box((-1, 0.0557, 0.0), (1, 1, 0.105))]
+    v = np.vstack([p[0] for p in parts])
+    f = np.vstack([p[1] + sum(len(q[0]) for q in parts[:i]) for i, p in enumerate(parts)])
+    slot = collision.MeshCollider(v, f)
+    cube = collision.Body(*collision.box((-0.05, -0.05, 0.0), (0.05, 0.05, 0.1)))
+    pose = _shift(0, 0, -0.001)
+    assert slot.collides(cube, pose) and not slot.frees(cube, pose, 0.01)
+    assert slot.frees(cube, pose, 0.002)
+    assert slot.separation(cube, pose, limit=0.01) == 0.002
+    assert slot.separation(cube, pose) == 0.002
+
+
 def test_a_board_edge_over_a_mug_in_a_niche_is_not_a_tap():
     """A mug in a niche (a board under it, panels on three sides) with a board's front edge
     2.5 cm behind its axis and 13 cm over its rim passes the basin test and has scene surface

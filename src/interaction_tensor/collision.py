@@ -88,14 +88,16 @@ class MeshCollider:
         :func:`directions` so that it no longer intersects the mesh: 0 when it does not
         intersect at its pose, ``inf`` when no tried move frees it. An upper bound of the
         penetration depth (the true minimal move may be shorter, in another direction).
-        With ``limit``, only whether it is at most ``limit`` matters: a body that ``limit``
-        does not free is ``inf`` at once (26 tests instead of up to 182)."""
+        With ``limit``, only whether it is at most ``limit`` matters: the lengths shorter
+        than ``limit``, then ``limit``, and ``inf`` past it. Every one of them is tried, in
+        order: a move is not freer for being longer (a bowl on a counter with a board 5 mm
+        above it is freed by 2 and 5 mm and blocked by 1 cm, where it hits the board; the
+        judge, trying 1 cm first, once called such poses "penetrates deeply" or free as a
+        micrometre of rounding made them touch the counter or not)."""
         pose = np.asarray(pose, float)
         if not self.collides(body, pose):
             return 0.0
         if limit is not None:
-            if not self.frees(body, pose, limit):
-                return float("inf")
             lengths = [x for x in lengths if x < limit] + [limit]
         for length in lengths:
             if self.frees(body, pose, length):
