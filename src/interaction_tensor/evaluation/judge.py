@@ -216,6 +216,12 @@ class Verdict:
                 "reasons": list(self.reasons)}
 
 
+def tilt_degrees(pose) -> float:
+    """The angle (degrees) between a pose's object vertical (+Z of the training frame) and
+    the scene's +Z (the upright test)."""
+    return float(np.degrees(np.arccos(np.clip(np.asarray(pose, float)[2, 2], -1.0, 1.0))))
+
+
 class JudgeScene:
     """The scene as the judge sees it: its triangles (for exact collision), dense seeded
     surface samples and their KD-tree (for contact, support and what is above or below)."""
@@ -396,8 +402,7 @@ class Judge:
 
         com = moved(self.com)
         reasons = []
-        # the angle between the object's own vertical and the scene's
-        tilt = float(np.degrees(np.arccos(np.clip(rot[2, 2], -1.0, 1.0))))
+        tilt = tilt_degrees(pose)
         if "upright" in self.tests and tilt > st.max_tilt:
             reasons.append(f"tilted {tilt:.0f} degrees from upright")
         pen = 0.0
@@ -416,8 +421,7 @@ class Judge:
         if contact < need:
             reasons.append(f"main contact only {contact * 100:.0f} % touching")
 
-        verdict = Verdict(False, pen, contact)
-        verdict.tilt = tilt
+        verdict = Verdict(False, pen, contact, tilt=tilt)
         near = np.asarray(scene.tree.query_ball_point(com, self.radius + 2 * st.spacing),
                           np.int64)
         local = scene.points[near]

@@ -479,7 +479,6 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
             out.append(_entry(ex, "validation:floorless_traps", site_pose(ex, s.point, a), True,
                               "hook over a rail in a floorless scan", s.note))
         log(f"floorless_traps: {len(out)} poses so far")
-    if scenes is None:
         # hangers turned level on their support, the hook still round it (the judge's upright
         # test: gravity swings a hanger down; nothing else in the judge sees it)
         ex = examples["hanging"]
@@ -606,8 +605,9 @@ def upright(poses: list, tolerance: float = 1.0) -> list:
     detection can propose, as it only turns an example about +Z. The scripts that choose
     detection's tests on the labelled set leave the tilted negatives out, which only the
     judge's upright test is for."""
-    return [p for p in poses
-            if np.degrees(np.arccos(np.clip(p.pose[2][2], -1.0, 1.0))) <= tolerance]
+    from .judge import tilt_degrees
+
+    return [p for p in poses if tilt_degrees(p.pose) <= tolerance]
 
 
 # ------------------------------------------------------------------ judging the judge
