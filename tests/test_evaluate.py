@@ -16,17 +16,35 @@ from conftest import shared_file
 
 
 def test_metrics_definitions():
-    def j(aff, m, group, valid):
-        return {"affordance": aff, "method": m, "group": group, "valid": valid}
-    js = ([j("placing", "Naive", "top", True)] * 3 + [j("placing", "Naive", "top", False)] * 2
-          + [j("placing", "Naive", "bottom", False)] * 4 + [j("placing", "Naive", "bottom", True)])
+    def j(aff, m, group, valid, accepted=True):
+        return {"affordance": aff, "method": m, "group": group, "valid": valid,
+                "accepted": accepted}
+    # a top 5 of 2 accepted valid poses, 1 accepted invalid, and 2 rejected fillers (one
+    # of them valid all the same)
+    js = ([j("placing", "Naive", "top", True)] * 2 + [j("placing", "Naive", "top", False)]
+          + [j("placing", "Naive", "top", True, False), j("placing", "Naive", "top", False, False)]
+          + [j("placing", "Naive", "bottom", False, False)] * 4
+          + [j("placing", "Naive", "bottom", True, False)]
+          # sitting accepts nothing: its precision of accepted top poses is undefined
+          + [j("sitting", "Naive", "top", False, False)] * 5)
     rows = metrics(js, ("Naive",))
     r = rows[0]
     assert (r["tp"], r["fp"], r["tn"], r["fn"]) == (3, 2, 4, 1)
     assert r["accuracy"] == pytest.approx(70.0)
     assert r["f_score"] == pytest.approx(100 * 6 / 9)
     assert r["precision"] == pytest.approx(60.0)
-    assert rows[-1]["affordance"] == "average" and rows[-1]["accuracy"] == pytest.approx(70.0)
+    # of the 3 top poses it accepted, 2 are valid; the rejected fillers do not count
+    assert (r["accepted_top"], r["accepted_top_valid"]) == (3, 2)
+    assert r["accepted_precision"] == pytest.approx(100 * 2 / 3)
+    sit = rows[1]
+    assert sit["affordance"] == "sitting" and sit["accepted_top"] == 0
+    assert np.isnan(sit["accepted_precision"]) and sit["precision"] == 0.0
+    avg = rows[-1]
+    assert avg["affordance"] == "average"
+    assert avg["accuracy"] == pytest.approx((70.0 + 0.0) / 2)
+    # the average share leaves out the affordance with nothing accepted
+    assert avg["accepted_precision"] == pytest.approx(100 * 2 / 3)
+    assert (avg["accepted_top"], avg["accepted_top_valid"]) == (3, 2)
 
 
 def test_evaluate_smoke_on_two_scenes(tmp_path):
@@ -66,6 +84,16 @@ def test_evaluate_smoke_on_two_scenes(tmp_path):
     it_rows = [j for j in judged if j["method"].startswith("iT")]
     assert len(it_rows) == 2 * 2 * 10
     assert len(judged) <= 2 * 4 * 10
+    # the top poses each method accepted, counted from the judgements themselves
+    with open(out / "table1_detailed.csv") as fh:
+        detailed = {(r["affordance"], r["method"]): r for r in csv.DictReader(fh)}
+    for m in METHODS:
+        said = [j for j in judged if j["method"] == m and j["group"] == "top"
+                and j["accepted"] == "True"]
+        r = detailed[("placing", m)]
+        assert int(r["accepted_top"]) == len(said)
+        assert int(r["accepted_top_valid"]) == sum(j["valid"] == "True" for j in said)
+    assert "## The top predictions each method accepted" in (out / "table1.md").read_text()
 
 
 def test_evaluate_bad_input_is_one_line_error(tmp_path, capsys):
