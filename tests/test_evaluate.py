@@ -42,9 +42,12 @@ def test_metrics_definitions():
     avg = rows[-1]
     assert avg["affordance"] == "average"
     assert avg["accuracy"] == pytest.approx((70.0 + 0.0) / 2)
-    # the average share leaves out the affordance with nothing accepted
+    # the average share pools the accepted top poses (sitting adds none)
     assert avg["accepted_precision"] == pytest.approx(100 * 2 / 3)
     assert (avg["accepted_top"], avg["accepted_top_valid"]) == (3, 2)
+    # pooled, not the mean of the affordances' shares: 3 of 4, not (2/3 + 1) / 2
+    rows = metrics(js + [j("hanging", "Naive", "top", True)], ("Naive",))
+    assert rows[-1]["accepted_precision"] == pytest.approx(75.0)
 
 
 def test_evaluate_smoke_on_two_scenes(tmp_path):

@@ -13,49 +13,41 @@ def _fmt(v) -> str:
     return "n/a" if v is None or (isinstance(v, float) and np.isnan(v)) else f"{v:.1f}"
 
 
+def _method_grid(rows: list[dict], methods, heads, cells) -> str:
+    """A Markdown table with one line per affordance (and the average) and, per method, the
+    columns ``heads(m)`` filled by ``cells(row)`` (blank where the method has no row)."""
+    affs = [a for a in list(AFFORDANCES) + ["average"] if any(r["affordance"] == a for r in rows)]
+    methods = [m for m in methods if any(r["method"] == m for r in rows)]
+    width = len(heads(""))
+    lines = ["| affordance | " + " | ".join(h for m in methods for h in heads(m)) + " |",
+             "|---|" + "---:|" * (width * len(methods))]
+    for a in affs:
+        line = []
+        for m in methods:
+            r = next((r for r in rows if r["affordance"] == a and r["method"] == m), None)
+            line += [""] * width if r is None else cells(r)
+        name = f"**{a}**" if a == "average" else a
+        lines.append(f"| {name} | " + " | ".join(line) + " |")
+    return "\n".join(lines)
+
+
 def table_markdown(rows: list[dict], methods=METHODS) -> str:
     """Table 1 as Markdown: one line per affordance; per method the precision of the top 5
     (the paper's comparable number), accuracy and F-score over top and bottom 5, and the
     (scene, example) runs that accepted any prediction."""
-    affs = [a for a in list(AFFORDANCES) + ["average"] if any(r["affordance"] == a for r in rows)]
-    methods = [m for m in methods if any(r["method"] == m for r in rows)]
-    head = ("| affordance | " + " | ".join(f"{m} prec / acc / F | {m} runs accepting"
-                                          for m in methods) + " |")
-    lines = [head, "|---|" + "---:|" * (2 * len(methods))]
-    for a in affs:
-        cells = []
-        for m in methods:
-            r = next((r for r in rows if r["affordance"] == a and r["method"] == m), None)
-            if r is None:
-                cells += ["", ""]
-                continue
-            cells += [f"{_fmt(r['precision'])} / {_fmt(r['accuracy'])} / {_fmt(r['f_score'])}",
-                      f"{r.get('with_accepted', 0)}/{r.get('runs', 0)}"]
-        name = f"**{a}**" if a == "average" else a
-        lines.append(f"| {name} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+    return _method_grid(
+        rows, methods, lambda m: (f"{m} prec / acc / F", f"{m} runs accepting"),
+        lambda r: [f"{_fmt(r['precision'])} / {_fmt(r['accuracy'])} / {_fmt(r['f_score'])}",
+                   f"{r.get('with_accepted', 0)}/{r.get('runs', 0)}"])
 
 
 def accepted_markdown(rows: list[dict], methods=METHODS) -> str:
     """Per affordance and method: the top poses the method accepted, how many of them the
     judge found valid, and that share (%)."""
-    affs = [a for a in list(AFFORDANCES) + ["average"] if any(r["affordance"] == a for r in rows)]
-    methods = [m for m in methods if any(r["method"] == m for r in rows)]
-    lines = ["| affordance | " + " | ".join(f"{m} valid / accepted top | {m} %"
-                                          for m in methods) + " |",
-             "|---|" + "---:|" * (2 * len(methods))]
-    for a in affs:
-        cells = []
-        for m in methods:
-            r = next((r for r in rows if r["affordance"] == a and r["method"] == m), None)
-            if r is None or "accepted_top" not in r:
-                cells += ["", ""]
-                continue
-            cells += [f"{r['accepted_top_valid']}/{r['accepted_top']}",
-                      _fmt(r["accepted_precision"])]
-        name = f"**{a}**" if a == "average" else a
-        lines.append(f"| {name} | " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+    return _method_grid(
+        rows, methods, lambda m: (f"{m} valid / accepted top", f"{m} %"),
+        lambda r: [f"{r['accepted_top_valid']}/{r['accepted_top']}",
+                   _fmt(r["accepted_precision"])])
 
 
 def scene_rows(runs: list[dict], methods=METHODS) -> list[dict]:

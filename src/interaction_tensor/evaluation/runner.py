@@ -28,7 +28,8 @@ Protocol (after the paper's human-marker protocol, section 4.2):
   (scene, example) runs accepted any prediction. Beside them, **precision of the accepted
   top predictions**: of the top poses the method itself accepted, the share valid (what a
   user is told; a scene with nothing to accept adds none, so this is not the paper's
-  measure and no target is set on it). The average row is the mean over the five
+  measure and no target is set on it; its average row pools the affordances' accepted top
+  poses). The average row is otherwise the mean over the five
   affordances (as the paper's Table 1). The paper's own numbers fit F = 2 P / (1 + P) in
   every row, i.e. its "accuracy" is the precision of the top predictions with every bottom
   prediction counted as a true negative: our precision column is the comparable number.
@@ -330,18 +331,22 @@ def metrics(judgements, methods=METHODS, runs=()) -> list[dict]:
                    "precision": prec, "tp": tp, "fp": fp, "tn": tn, "fn": fn,
                    "runs": len(rr), "with_accepted": sum(r["any_accepted"] for r in rr),
                    "accepted_top": len(said), "accepted_top_valid": said_ok,
-                   "accepted_precision": (100.0 * said_ok / len(said) if said
-                                          else float("nan"))}
+                   "accepted_precision": _share(said_ok, len(said))}
             per.append(row)
             rows.append(row)
         if per:
-            rows.append({"affordance": "average", "method": m,
-                         **{k: float(np.mean([r[k] for r in per]))
-                            for k in ("accuracy", "f_score", "precision")},
-                         "accepted_precision": (float(np.mean(shares)) if (shares := [
-                             r["accepted_precision"] for r in per
-                             if np.isfinite(r["accepted_precision"])]) else float("nan")),
-                         **{k: int(sum(r[k] for r in per))
-                            for k in ("tp", "fp", "tn", "fn", "runs", "with_accepted",
-                                      "accepted_top", "accepted_top_valid")}})
+            avg = {"affordance": "average", "method": m,
+                   **{k: float(np.mean([r[k] for r in per]))
+                      for k in ("accuracy", "f_score", "precision")},
+                   **{k: int(sum(r[k] for r in per))
+                      for k in ("tp", "fp", "tn", "fn", "runs", "with_accepted",
+                                "accepted_top", "accepted_top_valid")}}
+            # the accepted top poses of all affordances together, as its count beside it
+            avg["accepted_precision"] = _share(avg["accepted_top_valid"], avg["accepted_top"])
+            rows.append(avg)
     return rows
+
+
+def _share(part: int, whole: int) -> float:
+    """``part`` of ``whole`` in %; NaN when ``whole`` is 0 (nothing to count)."""
+    return 100.0 * part / whole if whole else float("nan")
