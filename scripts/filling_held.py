@@ -27,6 +27,7 @@ from interaction_tensor.descriptor import InteractionTensor
 from interaction_tensor.detect import candidate_mask, score_at
 from interaction_tensor.examples import interactions, shapes
 from interaction_tensor.io import Geometry, load_geometry
+from interaction_tensor.predictions import top_k
 
 #: The taps seen on top views (scene: outlet x, y in metres), as in filling_at_taps.py.
 TAPS = {"kitchen1": (7.12, 10.15), "kitchen4": (0.52, 2.78), "kitchen5": (2.16, 0.97)}
@@ -41,17 +42,6 @@ def held_tensor(objects: str, gap: float, seed: int = 0) -> InteractionTensor:
     return InteractionTensor.fit(cup, ex.scene_object, "filling-cup-held",
                                  interactions.train_settings("filling-cup", seed=seed),
                                  ground=ex.ground)
-
-
-def best_apart(points, scores, n: int = 5, apart: float = 0.15) -> list:
-    """Indices of the ``n`` best scores whose points lie ``apart`` (m) from each other."""
-    kept = []
-    for k in np.argsort(-scores, kind="stable"):
-        if all(np.linalg.norm(points[k] - points[j]) >= apart for j in kept):
-            kept.append(int(k))
-            if len(kept) == n:
-                break
-    return kept
 
 
 def main(argv=None) -> int:
@@ -82,7 +72,7 @@ def main(argv=None) -> int:
                 else idx
             pos, orient = np.repeat(sel, 8), np.tile(np.arange(8), len(sel))
             s = score_at(tensor, scene, p[pos], orient)
-            best = best_apart(p[pos], s)
+            best = top_k(p, s, 5, 0.15, index=pos)       # the best 5, 15 cm apart
             cells = ", ".join(f"{s[k]:.3f} ({np.linalg.norm(p[pos[k], :2] - tap):.2f})"
                               if name in TAPS else f"{s[k]:.3f}" for k in best)
             print(f"| {name} | {where} | {len(sel)} | {cells} |", flush=True)
