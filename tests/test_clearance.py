@@ -141,6 +141,50 @@ def test_rank_pairs_reaches_placed_pairs_below_many_better_scored_failures(bowl)
     assert best_ok.all() and np.allclose(best_s, full[exact])
 
 
+@pytest.mark.parametrize("threshold", [0.3, 0.6])
+def test_completing_only_the_placed_pairs_changes_only_the_work(bowl, threshold):
+    """complete_scores='placed' (the default) stops every pair at its decision and scores
+    again in full only the pairs that pass the placement tests: the same decisions, the
+    same scores of those pairs bit for bit, the same heat map, predictions and rankings as
+    'accepted' (every pair the score accepts completed), with fewer comparisons; a pair the
+    score accepted that failed a placement test keeps the partial score of its decision
+    until a ranking completes it."""
+    from interaction_tensor.clearance import FAILS_COLLISION, PLACED
+    from interaction_tensor.examples import demo
+
+    room = it.prepare_scene(demo.build().scene, 0.02, seed=0)
+
+    def run(mode):
+        return it.detect(room, bowl, it.DetectSettings(sample_fraction=0.03, threshold=threshold,
+                                                       complete_scores=mode, top_k=5))
+    p, a = run("placed"), run("accepted")
+    failed = a.score_accepted & (a.placement != PLACED) & (a.placement != FAILS_COLLISION)
+    acc = a.pairs.accepted
+    assert failed.sum() > 50 and acc.sum() > 20 and (~a.score_accepted).sum() > 50
+    for name in ("score_accepted", "placement", "heat", "accepted_count"):
+        np.testing.assert_array_equal(getattr(p, name), getattr(a, name))
+    np.testing.assert_array_equal(p.pairs.accepted, acc)
+    np.testing.assert_array_equal(p.pairs.decided_at, a.pairs.decided_at)
+    np.testing.assert_array_equal(p.pairs.score[acc], a.pairs.score[acc])
+    np.testing.assert_array_equal(p.pairs.score[~a.score_accepted],
+                                  a.pairs.score[~a.score_accepted])
+    assert [(q.point_index, q.orientation_index, q.score) for q in p.predictions] == \
+        [(q.point_index, q.orientation_index, q.score) for q in a.predictions]
+    np.testing.assert_array_equal(p.complete, a.score_accepted & ~failed)
+    assert p.stats["pairs_completed"] == int((a.score_accepted & ~failed).sum())
+    assert (p.pairs.score[failed] <= a.pairs.score[failed]).all()
+    assert (p.pairs.score[failed] < a.pairs.score[failed]).mean() > 0.5
+    assert p.pairs.comparisons < a.pairs.comparisons
+    for worst in (False, True):
+        got = rank_pairs(p, 5, 0.15, worst=worst, block=64)
+        want = rank_pairs(a, 5, 0.15, worst=worst, block=64)
+        for g, w in zip(got, want):
+            np.testing.assert_array_equal(g, w)
+    # the ranking completed the failed pairs' scores in place
+    assert p.complete[failed].all()
+    np.testing.assert_array_equal(p.pairs.score[failed], a.pairs.score[failed])
+
+
 def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
     from interaction_tensor.evaluation.tuning import COLUMNS
 

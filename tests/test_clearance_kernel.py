@@ -43,6 +43,11 @@ def test_kernel_equals_reference_on_clutter(seed):
     fast = count_violations(points, orient, offsets, radius, 0.005, None, grid)
     assert ref.sum() > 0 and (ref == 0).any()
     np.testing.assert_array_equal(fast, ref)
+    # counted up to a stop (detection's: the first count past the limit), the same below it
+    for stop in (1, 3, int(np.median(ref[ref > 0])) + 1):
+        stopped = count_violations(points, orient, offsets, radius, 0.005, None, grid, stop=stop)
+        np.testing.assert_array_equal(stopped, np.minimum(ref, stop))
+        assert (ref >= stop).any() and (ref < stop).any()
 
 
 def test_kernel_equals_reference_on_a_descriptor():

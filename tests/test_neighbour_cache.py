@@ -39,6 +39,35 @@ def test_cached_scoring_is_bit_identical(criterion, vectors):
                 assert np.array_equal(a, b)
 
 
+def test_nearest_through_a_built_cache_is_the_grid_search():
+    """The placement tests' nearest samples go through the grid's cache as scoring left
+    it (built trees scanned, the rest searched): the same indices as the grid search."""
+    from interaction_tensor.examples import demo
+
+    q, s = corner_example()
+    t = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1))
+    scene = it.prepare_scene(demo.build().scene, 0.02, seed=3)
+    rng = np.random.default_rng(1)
+    idx = rng.choice(len(scene), 2000, replace=False)
+    grid = scene.grid()
+    grid.cache = None
+    score_pairs_numba(scene.points[idx], rng.integers(0, 8, len(idx)),
+                      keypoint_table(t, it.DetectSettings()), grid, 0.6, t.vectors,
+                      scene.spacing, True, cache=True)
+    cache = grid.cache
+    assert cache is not None and cache.used[0] > 0
+    near = scene.points[rng.integers(0, len(scene), 20000)] + rng.normal(0, 0.03, (20000, 3))
+    far = rng.uniform(-3, 8, (5000, 3))                       # partly outside the cache
+    queries = np.vstack([near, far])
+    cached = kernels.nearest_indices(grid, queries)
+    grid.cache = None
+    plain = kernels.nearest_indices(grid, queries)
+    grid.cache = cache
+    np.testing.assert_array_equal(cached, plain)
+    d = np.linalg.norm(scene.points[plain] - queries, axis=1)
+    np.testing.assert_allclose(d, scene.tree.query(queries)[0], rtol=0, atol=1e-12)
+
+
 def test_detection_with_the_cache_decides_alike(monkeypatch):
     """Grid search (False), auto (None: dense test points, so the cache, within a budget
     per scene point that here is ample, forces resets, or leaves no room at all) and a kept
@@ -166,6 +195,7 @@ def test_the_auto_cache_has_a_floor_whatever_the_scene_size(monkeypatch):
     t = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1))
     scene = it.prepare_scene(s, 0.01, seed=2)
     it.detect(scene, t, it.DetectSettings(sample_fraction=0.4))
-    assert seen == [det_mod.CACHE_AUTO_FLOOR] and det_mod.CACHE_AUTO_FLOOR >= 32 * 2**20
+    # the decisions, then the completion of the placed pairs' scores
+    assert seen == [det_mod.CACHE_AUTO_FLOOR] * 2 and det_mod.CACHE_AUTO_FLOOR >= 32 * 2**20
     assert det_mod.CACHE_AUTO_BYTES_PER_POINT * 10**8 > kernels.CACHE_BYTES >= \
         det_mod.CACHE_AUTO_FLOOR

@@ -46,8 +46,10 @@ def _occupied_within(qx, qy, qz, r, pts, starts, ox, oy, oz, cell, nx, ny, nz):
 
 
 @njit(cache=True, parallel=True)
-def violation_counts(points, orient, offsets, need, pts, starts, origin, cell, dims, out):
-    """out[i] = number of k with a sample nearer than need[k] to points[i] + offsets[orient[i], k]."""
+def violation_counts(points, orient, offsets, need, stop, pts, starts, origin, cell, dims,
+                     out):
+    """out[i] = number of k with a sample nearer than need[k] to points[i] + offsets[orient[i], k],
+    counted up to ``stop`` (a pair stops there)."""
     ox, oy, oz = origin[0], origin[1], origin[2]
     nx, ny, nz = dims[0], dims[1], dims[2]
     for i in prange(points.shape[0]):
@@ -58,18 +60,22 @@ def violation_counts(points, orient, offsets, need, pts, starts, origin, cell, d
                                 points[i, 2] + offsets[o, k, 2], need[k], pts, starts,
                                 ox, oy, oz, cell, nx, ny, nz):
                 n += 1
+                if n >= stop:
+                    break
         out[i] = n
 
 
-def counts(points, orient, offsets, need, grid) -> np.ndarray:
-    """(P,) int64 violations (see :func:`violation_counts`) on ``grid``."""
+def counts(points, orient, offsets, need, grid, stop: int | None = None) -> np.ndarray:
+    """(P,) int64 violations (see :func:`violation_counts`) on ``grid``, each counted up to
+    ``stop`` (None: all of them)."""
     out = np.zeros(len(points), np.int64)
     if len(points):
         violation_counts(np.ascontiguousarray(points, np.float64),
                          np.ascontiguousarray(orient, np.int64),
                          np.ascontiguousarray(offsets, np.float64),
-                         np.ascontiguousarray(need, np.float64), grid.points, grid.starts,
-                         np.asarray(grid.origin, np.float64), float(grid.cell),
+                         np.ascontiguousarray(need, np.float64),
+                         len(need) + 1 if stop is None else int(stop), grid.points,
+                         grid.starts, np.asarray(grid.origin, np.float64), float(grid.cell),
                          np.asarray(grid.dims, np.int64), out)
     return out
 

@@ -266,12 +266,17 @@ def _decision(s, k, rest, threshold, eps):
 
 @njit(cache=True, parallel=True, fastmath=False)
 def score(tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, max_terms, rest,
-          criterion, c, a, wsum, threshold, early_exit, surface, rho,
+          criterion, c, a, wsum, threshold, early_exit, surface, rho, resume,
           pts, nrm, starts, seed, origin, cell, dims, occ, out_score, out_acc, out_at,
           out_cmp):
     """Score pairs with the grid shell search for every keypoint (no set-up; the reference
     of :func:`score_cached`). Pair i: test point ``tp[i]`` (m), orientation ``orient[i]``;
-    outputs per pair: score, accepted, decided_at, comparisons."""
+    outputs per pair: score, accepted, decided_at, comparisons. ``early_exit``: 0 every
+    keypoint of every pair, 1 a pair stops when it is rejected (the score of an accepted
+    pair is complete), 2 a pair stops at its decision either way (the score is the partial
+    sum at the decision). ``resume``: every pair goes on from its decision, keypoint
+    ``out_at[i]`` on, adding to ``out_score[i]`` (the same sums, in the same order, as a
+    pair never stopped)."""
     n_pairs = tp.shape[0]
     nk = offsets.shape[1]
     ox, oy, oz = origin[0], origin[1], origin[2]
@@ -284,7 +289,10 @@ def score(tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, max_terms, 
         acc = False
         at = nk
         done = 0
-        for k in range(nk):
+        first = 0
+        if resume:
+            s, decided, acc, at, first = out_score[i], True, out_acc[i], out_at[i], out_at[i]
+        for k in range(first, nk):
             qx = tp[i, 0] + offsets[o, k, 0]
             qy = tp[i, 1] + offsets[o, k, 1]
             qz = tp[i, 2] + offsets[o, k, 2]
@@ -296,7 +304,7 @@ def score(tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, max_terms, 
                 d = _decision(s, k, rest, threshold, eps)
                 if d != 0:
                     decided, acc, at = True, d > 0, k + 1
-                    if d < 0 and early_exit:
+                    if early_exit == 2 or (d < 0 and early_exit == 1):
                         break
         if not decided:
             acc = s >= threshold - eps
@@ -599,7 +607,7 @@ LOOKAHEAD = 8
 
 @njit(cache=True, parallel=True, fastmath=False)
 def score_cached(perm, tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w, rest,
-                 criterion, c, a, wsum, threshold, early_exit, surface, rho,
+                 criterion, c, a, wsum, threshold, early_exit, surface, rho, resume,
                  pts, nrm, starts, seed, origin, cell, dims, occ,
                  ptab, pdims, pool, bo, hb, bdims, child, lstart, llen, lists, scan_max,
                  req, nreq, out_score, out_acc, out_at, out_cmp):
@@ -623,10 +631,13 @@ def score_cached(perm, tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w
         acc = False
         at = nk
         done = 0
+        first = 0
+        if resume:
+            s, decided, acc, at, first = out_score[i], True, out_acc[i], out_at[i], out_at[i]
         nr = 0
         leaves = np.empty(LOOKAHEAD, np.int64)
         stop = False
-        for k0 in range(0, nk, LOOKAHEAD):
+        for k0 in range(first, nk, LOOKAHEAD):
             k1 = min(k0 + LOOKAHEAD, nk)
             for k in range(k0, k1):
                 leaves[k - k0] = _leaf(tp[i, 0] + offsets[o, k, 0], tp[i, 1] + offsets[o, k, 1],
@@ -659,7 +670,7 @@ def score_cached(perm, tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w
                     d = _decision(s, k, rest, threshold, eps)
                     if d != 0:
                         decided, acc, at = True, d > 0, k + 1
-                        if d < 0 and early_exit:
+                        if early_exit == 2 or (d < 0 and early_exit == 1):
                             stop = True
                             break
             if stop:
@@ -671,6 +682,22 @@ def score_cached(perm, tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w
         out_acc[i] = acc
         out_at[i] = at
         out_cmp[i] = done
+
+
+@njit(cache=True, parallel=True)
+def nearest_many_cached(q, pts, starts, seed, occ, origin, cell, dims, ptab, pdims, pool, bo,
+                        hb, bdims, child, lstart, llen, lists, scan_max, out):
+    """:func:`nearest_many` through the neighbour cache as it stands (nothing is built):
+    a query whose root block is built scans its leaf's list, as :func:`score_cached` does;
+    the others search the grid. The same answers, bit for bit."""
+    for i in prange(q.shape[0]):
+        qx, qy, qz = q[i, 0], q[i, 1], q[i, 2]
+        n = _leaf(qx, qy, qz, ptab, pdims, pool, bo, hb, bdims, child)
+        if n >= 0 and llen[n] <= scan_max:
+            out[i] = _scan_list(qx, qy, qz, lists, lstart[n], llen[n], pts)
+        else:
+            out[i] = _nearest_call(qx, qy, qz, pts, starts, seed, occ, origin[0], origin[1],
+                                   origin[2], cell, dims[0], dims[1], dims[2])
 
 
 @njit(cache=True, parallel=True)

@@ -164,10 +164,13 @@ def violations(points: np.ndarray, orient: np.ndarray, offsets: np.ndarray,
 
 
 def count_violations(points: np.ndarray, orient: np.ndarray, offsets: np.ndarray,
-                     radius: np.ndarray, tolerance: float, scene, grid=None) -> np.ndarray:
+                     radius: np.ndarray, tolerance: float, scene, grid=None,
+                     stop: int | None = None) -> np.ndarray:
     """:func:`violations` of placements in ``scene``: on the Numba grid (``grid``, exact
     ball-emptiness tests, ``_numba_clearance``) when one is given, else with the scene's
-    cKDTree (the reference). Returns (P,) int64."""
+    cKDTree (the reference). On the grid a pair's count stops at ``stop`` (None: every
+    clearance point counted): a count of ``stop`` means at least that many. Returns (P,)
+    int64."""
     if grid is None:
         return violations(points, orient, offsets, radius, tolerance,
                           nearest_distance_function(scene, None, float(np.max(radius, initial=0))))
@@ -178,7 +181,7 @@ def count_violations(points: np.ndarray, orient: np.ndarray, offsets: np.ndarray
     if len(active) == 0 or len(points) == 0:
         return np.zeros(len(points), np.int64)
     return _numba_clearance.counts(points, np.ascontiguousarray(orient, np.int64),
-                                   offsets[:, active], need[active], grid)
+                                   offsets[:, active], need[active], grid, stop)
 
 
 def nearest_samples(queries: np.ndarray, scene, grid=None):
@@ -602,11 +605,12 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
     viol = np.zeros(p, np.int64)
     k = len(tensor.clearance_points)
     if settings.clearance and k and p:
-        viol = count_violations(points, orient, clearance_offsets(tensor, n_o),
-                                tensor.clearance_radius, settings.clearance_tolerance, scene,
-                                grid)
         limit = (settings.clearance_max_violations if settings.clearance_max_violations
                  is not None else tensor.clearance_limit)
+        # a pair fails past limit * k violations: its count stops at the first past it
+        viol = count_violations(points, orient, clearance_offsets(tensor, n_o),
+                                tensor.clearance_radius, settings.clearance_tolerance, scene,
+                                grid, stop=int(np.floor(limit * k)) + 1)
         outcome[viol > limit * k] = FAILS_CLEARANCE
     mode = tensor.contact_groups if settings.contact else "off"
     todo = np.flatnonzero(outcome == PLACED)

@@ -56,6 +56,10 @@ def detection_options(p) -> None:
                    help="suppression radius in metres (default: the query object's width)")
     p.add_argument("--no-early-exit", action="store_true",
                    help="compare every keypoint of every candidate")
+    p.add_argument("--complete-scores", choices=("placed", "accepted"), default="placed",
+                   help="which pairs are scored over every keypoint: those that pass the "
+                        "placement tests (default: every pair stops at its decision) or every "
+                        "pair the score accepts (the same predictions, slower)")
     p.add_argument("--no-clearance", action="store_true",
                    help="skip the clearance test (the scene nearer the object than in the "
                         "example)")
@@ -178,7 +182,8 @@ _SETTING_OPTIONS = {
     "criterion": "criterion", "keypoints": "keypoints", "threshold": "threshold",
     "scene_spacing": "spacing", "normal_tolerance_deg": "normal_tolerance",
     "oriented_normals": "oriented_normals", "nms_radius": "nms_radius", "backend": "backend",
-    "device": "device", "keypoint_order": "keypoint_order"}
+    "device": "device", "keypoint_order": "keypoint_order",
+    "complete_scores": "complete_scores"}
 
 
 def _detect_settings(args):
@@ -235,8 +240,10 @@ def _report(args, result, outdir) -> None:
                    f"({result.settings.normal_tolerance_deg:g} deg) of the descriptor's "
                    "affordance normal, so nothing was scored")
     rate = st.get("candidates_per_second")
+    done = st["seconds"].get("completion")
     _say(args, f"scored {st['pairs_scored']} (point, orientation) pairs in "
-               f"{st['seconds']['scoring']:.2f} s"
+               f"{st['scoring_seconds']:.2f} s"
+               f"{f' (of them {done:.2f} s completing the placed pairs)' if done else ''}"
                f"{f' ({rate:,.0f} candidates/s)' if rate else ''} ({st['backend']}"
                f"{' on ' + st['device'] if st['backend'] == 'torch' else ''}); "
                f"{st['mean_comparisons_per_decision']:.0f} keypoint comparisons per decision")

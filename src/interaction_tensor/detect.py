@@ -16,7 +16,8 @@ import numpy as np
 
 from .predictions import Prediction, heat_map, top_k
 from .scene import Scene
-from .kernels import CACHE_BYTES, ScoreJob, score_jobs
+from .kernels import (CACHE_BYTES, EXIT_AT_DECISION, EXIT_AT_REJECTION, EXIT_NEVER, ScoreJob,
+                      score_jobs)
 from .scoring import PairScores, all_terms, make_table, permuted, score_pairs
 from .settings import DetectSettings
 
@@ -114,7 +115,9 @@ class Detection:
         placement tests)
     score_accepted : (P,) bool, accepted by the score alone
     clearance_violations : (P,) int16 (int32 past 32,767 clearance points), clearance points
-        violated (-1 where not tested: pairs the score rejected, or no clearance test)
+        violated (-1 where not tested: pairs the score rejected, or no clearance test); on
+        the Numba backend counted up to the first past the limit (a pair that fails the
+        test holds the limit's count + 1)
     placement : (P,) int8, the outcome of the placement tests (see the attribute)
     heat : (N,) per scene point: best accepted score near it (0 where none)
     accepted_count : (N,) accepted orientations at each scene point
@@ -146,6 +149,9 @@ class Detection:
     placement: np.ndarray | None = None
     #: the collision test of ranked pairs (:class:`CollisionCheck`), None until built
     collisions: "CollisionCheck | None" = field(default=None, repr=False)
+    #: (P,) bool: pairs whose score covers every keypoint (the others hold the partial sum
+    #: at their decision, ``DetectSettings.complete_scores``); None: those the score accepted
+    complete: np.ndarray | None = None
 
     @property
     def accepted(self) -> np.ndarray:
@@ -370,10 +376,12 @@ def cache_pays(settings: DetectSettings, test_fraction: float) -> bool:
 
 
 def _score_all(scene, jobs, backend, index, settings, progress, label, use_cache=False,
-               cache_bytes=CACHE_BYTES):
+               cache_bytes=CACHE_BYTES, grouped=True):
     """Score every job's pairs in candidate batches; returns per job PairScores.
 
     Here a job's ``points`` are scene indices, gathered batch by batch to bound memory;
+    ``grouped``: they come in runs of ``n_orientations`` pairs of one candidate each (else
+    any pairs, ordered one by one);
     ``index`` is the backend's search structure (Numba grid, TorchIndex, or None for cKDTree);
     ``use_cache``: the Numba backend's neighbour cache (see :func:`cache_pays`), of at most
     ``cache_bytes`` bytes.
@@ -391,14 +399,18 @@ def _score_all(scene, jobs, backend, index, settings, progress, label, use_cache
         bar = tqdm(total=longest // n_o, unit="pt", desc=f"detect {label}", leave=False)
     # Numba: candidates in Z-order, so that a batch's keypoints stay in a compact region and
     # consecutive batches overlap (the neighbour cache is built once where they go)
-    zorder = ([spatial_order(scene.points, j.points, n_o, index) for j in jobs]
+    run = n_o if grouped else 1
+    zorder = ([spatial_order(scene.points, j.points, run, index) for j in jobs]
               if backend == "numba" else None)
     for start in range(0, longest, step):
         sl = slice(start, start + step)
         if backend == "numba":
-            picks = [_pairs_of(z[start // n_o:(start + step) // n_o], n_o) for z in zorder]
+            picks = [_pairs_of(z[start // run:(start + step) // run], run) for z in zorder]
             batch = [ScoreJob(scene.points[j.points[pk]], j.orient[pk], j.table, j.threshold,
-                              j.vectors, j.rho, j.early_exit) for j, pk in zip(jobs, picks)]
+                              j.vectors, j.rho, j.early_exit,
+                              None if j.resume_at is None else j.resume_score[pk],
+                              None if j.resume_at is None else j.resume_at[pk])
+                     for j, pk in zip(jobs, picks)]
             for i, (s, a, d, c) in enumerate(score_jobs(batch, index, use_cache, cache_bytes)):
                 totals[i][picks[i]], acc[i][picks[i]], at[i][picks[i]] = s, a, d
                 cmp_[i] += int(c.sum())
@@ -543,13 +555,15 @@ def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_or
 
 
 def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair_orient,
-            pairs, timings, backend, t0, device="cpu", clearance=None, rest=None) -> Detection:
+            pairs, timings, backend, t0, device="cpu", clearance=None, rest=None,
+            complete=None) -> Detection:
     """Top-k with suppression (placements that reach it tested for collision), heat map,
     statistics."""
     score_acc, viol, outcome = (clearance if clearance is not None
                                 else (pairs.accepted.copy(), None, None))
     det = Detection(scene, tensor, settings, threshold, test_idx, cand, pair_point,
-                    pair_orient, pairs, None, None, [], {}, score_acc, viol, rest, outcome)
+                    pair_orient, pairs, None, None, [], {}, score_acc, viol, rest, outcome,
+                    complete=complete)
     n_o = settings.n_orientations
     t3 = time.perf_counter()
     radius = suppression_radius(tensor, settings)
@@ -575,6 +589,7 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
 
     def failing(code):
         return int((outcome == code).sum()) if outcome is not None else 0
+    scoring_s = timings.get("scoring", 0) + timings.get("completion", 0)
     det.stats.update({
         "scene_points": int(len(scene)),
         "scene_notes": list(getattr(scene, "notes", [])),
@@ -604,12 +619,14 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
         "device": device,
         "keypoint_order": settings.keypoint_order,
         "seconds": {k: round(v, 4) for k, v in timings.items()},
+        "pairs_completed": int(complete.sum()) if complete is not None else None,
+        # the scoring stage: the decisions, then the placed pairs' scores completed
+        "scoring_seconds": round(scoring_s, 4),
         # rates count the work done: candidates (test points past the normal filter, all
-        # orientations decided) and (point, orientation) pairs scored, never sampled points
-        "candidates_per_second": (float(len(cand) / timings["scoring"])
-                                  if timings.get("scoring", 0) > 0 else None),
-        "pairs_per_second": (float(len(pair_point) / timings["scoring"])
-                             if timings.get("scoring", 0) > 0 else None),
+        # orientations decided, the placed pairs' scores completed) and (point,
+        # orientation) pairs scored, never sampled points
+        "candidates_per_second": (float(len(cand) / scoring_s) if scoring_s > 0 else None),
+        "pairs_per_second": (float(len(pair_point) / scoring_s) if scoring_s > 0 else None),
     })
     return det
 
@@ -664,6 +681,13 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     timings["candidates"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     backend, index = _prepare_index(scene, settings)
+    # the Numba kernels stop every pair at its decision; the pairs that pass the placement
+    # tests are scored in full afterwards (DetectSettings.complete_scores)
+    decide_first = (settings.early_exit and settings.complete_scores == "placed"
+                    and backend == "numba")
+    for job in jobs:
+        job.early_exit = (EXIT_AT_DECISION if decide_first
+                          else EXIT_AT_REJECTION if settings.early_exit else EXIT_NEVER)
     timings["index"] = time.perf_counter() - t1
     if settings.keypoint_order == "adaptive":
         t1 = time.perf_counter()
@@ -683,31 +707,90 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     scores = _score_all(scene, jobs, backend, index, settings, progress, label, use_cache,
                         budget)
     if use_cache and auto:
-        index.cache = None      # auto: its memory goes back before clearance and export
+        # auto: its memory goes back before the placement tests (the completion builds
+        # what it needs again: 581 MB peak against 744 MB kept, a 2 M-point cloud,
+        # benchmarks/memory.py) and export
+        index.cache = None
     timings["scoring"] = time.perf_counter() - t2
     t3 = time.perf_counter()
     grid = index if backend == "numba" else None
     clear = [check_clearance(scene, tensor, settings, pp, po, pairs, grid)
              for tensor, pp, po, pairs in zip(tensors, pp_list, po_list, scores)]
     timings["clearance"] = time.perf_counter() - t3
+    if decide_first:
+        t4 = time.perf_counter()
+        complete = _complete_placed(scene, jobs, scores, backend, index, settings, progress,
+                                    label, use_cache, budget)
+        if use_cache and auto:
+            index.cache = None
+        timings["completion"] = time.perf_counter() - t4
+    elif settings.early_exit:
+        complete = [cl[0].copy() for cl in clear]            # accepted by the score
+    else:
+        complete = [np.ones(len(pp), bool) for pp in pp_list]
     device = str(index.device) if backend == "torch" else "cpu"
     return [_finish(scene, tensor, settings, job.threshold, test_idx, cand, pp, po, pairs,
-                    dict(timings), backend, t0, device, cl, job.table.rest)
-            for tensor, job, cand, pp, po, pairs, cl in zip(tensors, jobs, cands, pp_list,
-                                                            po_list, scores, clear)]
+                    dict(timings), backend, t0, device, cl, job.table.rest, cm)
+            for tensor, job, cand, pp, po, pairs, cl, cm in zip(tensors, jobs, cands, pp_list,
+                                                                po_list, scores, clear,
+                                                                complete)]
+
+
+def _complete_placed(scene, jobs, scores, backend, index, settings, progress, label,
+                     use_cache, budget) -> list:
+    """Complete the scores of the pairs that passed the placement tests: each goes on from
+    its decision (where it stopped) over the rest of the keypoints, in place on
+    ``scores``; returns per job the (P,) bool mask of complete scores. The same kernel,
+    keypoint order and running sum as a pair the score accepted gets with
+    ``complete_scores='accepted'``: the scores are bit for bit those."""
+    idx = [np.flatnonzero(pairs.accepted) for pairs in scores]
+    subs = [ScoreJob(job.points[i], job.orient[i], job.table, job.threshold, job.vectors,
+                     job.rho, EXIT_AT_REJECTION, pairs.score[i], pairs.decided_at[i])
+            for job, i, pairs in zip(jobs, idx, scores)]
+    again = _score_all(scene, subs, backend, index, settings, progress,
+                       f"complete {label}", use_cache, budget, grouped=False)
+    out = []
+    for pairs, i, res in zip(scores, idx, again):
+        pairs.score[i] = res.score
+        pairs.comparisons += res.comparisons
+        done = np.zeros(len(pairs.score), bool)
+        done[i] = True
+        out.append(done)
+    return out
+
+
+def _complete_mask(det: Detection) -> np.ndarray:
+    """(P,) bool: the pairs of ``det`` whose score covers every keypoint."""
+    if det.complete is not None:
+        return det.complete
+    return det.score_accepted if det.score_accepted is not None else det.pairs.accepted
+
+
+def complete_scores(det: Detection, idx: np.ndarray) -> None:
+    """Score pairs ``idx`` of ``det`` over every keypoint where they stopped at their
+    decision, in place (``det.pairs.score``, ``det.complete``)."""
+    idx = np.asarray(idx, np.int64)
+    todo = idx[~_complete_mask(det)[idx]]
+    for s in range(0, len(todo), 262_144):                # bounds the gathered positions
+        sl = todo[s:s + 262_144]
+        det.pairs.score[sl] = full_scores(det, sl)[0]
+    if det.complete is None:
+        det.complete = _complete_mask(det).copy()
+    det.complete[todo] = True
 
 
 def full_scores(det: Detection, idx: np.ndarray):
     """Full scores (every keypoint) and clearance of pairs ``idx`` of a detection.
 
     Returns (scores (I,) float64, placed (I,) bool: the pair passes the placement tests,
-    clearance, contact and interior). Accepted pairs are read off (they were completed); the
+    clearance, contact and interior). Complete scores (``Detection.complete``: the pairs
+    that passed the placement tests, or every pair the score accepted) are read off; the
     others are scored again without early exit.
     """
     idx = np.asarray(idx, np.int64)
     st = det.settings
     scores = det.pairs.score[idx].copy()
-    redo = ~det.score_accepted[idx] if det.score_accepted is not None else ~det.pairs.accepted[idx]
+    redo = ~_complete_mask(det)[idx]
     if redo.any():
         sub = idx[redo]
         table = keypoint_table(det.tensor, st)
@@ -782,7 +865,8 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     (:class:`CollisionCheck`, when it applies): one that crosses the scene ranks below every
     other pair, one that passed the other tests but could not be tested (the tests allowed
     are spent) with those that failed them. Worst: by full score alone (lowest first).
-    Accepted pairs were completed and given their placement tests, so they rank from the
+    Accepted pairs were completed (those that failed a placement test are completed first,
+    :func:`complete_scores`) and given their placement tests, so they rank from the
     start. Rejected pairs kept only a partial score; their full score lies between it and
     ``score + rest[decided_at]``, so they are scored fully in the order of those bounds
     until no unscored pair can enter the k (branch and bound: exact, up to
@@ -798,8 +882,13 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     n = len(det.pairs.score)
     if n == 0 or k <= 0:
         return np.zeros(0, np.int64), np.zeros(0), np.zeros(0, bool)
+    # pairs the score accepted and that failed a placement test stopped at their decision
+    # (complete_scores='placed'): scored in full first, so that they rank from the start as
+    # when every accepted pair was completed (exactly the same ranking)
+    accepted = det.score_accepted if det.score_accepted is not None else det.pairs.accepted
+    complete_scores(det, np.flatnonzero(accepted & ~_complete_mask(det)))
     score = det.pairs.score
-    done = det.score_accepted if det.score_accepted is not None else det.pairs.accepted
+    done = _complete_mask(det) & accepted
     rest = det.rest if det.rest is not None else keypoint_table(det.tensor, det.settings).rest
     upper = np.where(done, score, score + rest[det.pairs.decided_at])
     key = np.full(n, np.nan)

@@ -211,23 +211,38 @@ def _compile():
         from . import _numba_kernels as nk
 
         _KERNELS = {name: getattr(nk, name) for name in (
-            "score", "score_cached", "nearest_many", "collect_requests", "build_roots",
+            "score", "score_cached", "nearest_many", "nearest_many_cached",
+            "collect_requests", "build_roots",
             "integrate", "morton_order", "touched_roots", "shift_trees")}
     return _KERNELS
 
 
 def nearest_indices(grid: Grid, queries: np.ndarray) -> np.ndarray:
-    """Exact nearest scene point (original index) of each query, (Q,) int64."""
+    """Exact nearest scene point (original index) of each query, (Q,) int64; through the
+    grid's neighbour cache where it has one (the trees it holds; nothing is built)."""
     k = _compile()
     out = np.empty(len(queries), np.int64)
-    k["nearest_many"](np.ascontiguousarray(queries, dtype=np.float64), grid.points,
-                      grid.starts, grid.seed, grid.occ, grid.origin, grid.cell, grid.dims, out)
+    q = np.ascontiguousarray(queries, dtype=np.float64)
+    cache = getattr(grid, "cache", None)
+    if cache is not None and len(q):
+        k["nearest_many_cached"](q, grid.points, grid.starts, grid.seed, grid.occ, grid.origin,
+                                 grid.cell, grid.dims, *cache.state(), out)
+    else:
+        k["nearest_many"](q, grid.points, grid.starts, grid.seed, grid.occ, grid.origin,
+                          grid.cell, grid.dims, out)
     return out if grid.order is None else grid.order[out]
+
+
+#: ``ScoreJob.early_exit``: every keypoint of every pair; stop a pair when it is rejected (an
+#: accepted pair's score is complete); stop a pair at its decision, accepted or rejected
+EXIT_NEVER, EXIT_AT_REJECTION, EXIT_AT_DECISION = 0, 1, 2
 
 
 @dataclass
 class ScoreJob:
-    """One keypoint table to score over a set of (test point, orientation) pairs."""
+    """One keypoint table to score over a set of (test point, orientation) pairs.
+    ``early_exit``: :data:`EXIT_NEVER`, :data:`EXIT_AT_REJECTION` (or True) or
+    :data:`EXIT_AT_DECISION` (the Numba kernels only)."""
 
     points: np.ndarray
     orient: np.ndarray
@@ -235,7 +250,11 @@ class ScoreJob:
     threshold: float
     vectors: str = "surface"
     rho: float = 0.01
-    early_exit: bool = True
+    early_exit: bool | int = True
+    #: (P,) partial score and keypoint of each pair's decision: go on from there (the Numba
+    #: kernels: the scores of pairs that stopped at their decision, completed)
+    resume_score: np.ndarray | None = None
+    resume_at: np.ndarray | None = None
 
 
 def _job_args(job: ScoreJob, grid: Grid) -> tuple:
@@ -245,9 +264,9 @@ def _job_args(job: ScoreJob, grid: Grid) -> tuple:
     return (np.ascontiguousarray(t.offsets), np.ascontiguousarray(t.provenance), pnorm,
             np.ascontiguousarray(t.weights), cos_lim, big_w, t.max_terms, t.rest,
             0 if t.criterion == "paper" else 1, t.c, t.a, float(t.weights.sum()),
-            float(job.threshold), bool(job.early_exit), job.vectors == "surface",
-            float(job.rho), grid.points, grid.normals, grid.starts, grid.seed, grid.origin, grid.cell,
-            grid.dims, grid.occ)
+            float(job.threshold), int(job.early_exit), job.vectors == "surface",
+            float(job.rho), job.resume_at is not None, grid.points, grid.normals, grid.starts,
+            grid.seed, grid.origin, grid.cell, grid.dims, grid.occ)
 
 
 class NeighbourCache:
@@ -553,6 +572,10 @@ def score_jobs(jobs: list, grid: Grid, cache: bool | None = None,
     for job in jobs:
         p = len(job.points)
         out = (np.zeros(p), np.zeros(p, np.bool_), np.zeros(p, np.int64), np.zeros(p, np.int64))
+        if job.resume_at is not None:
+            out[0][:] = job.resume_score
+            out[1][:] = True
+            out[2][:] = job.resume_at
         if p:
             # pairs differ a lot in cost (an accepted pair compares every keypoint): hand
             # them to the threads in small chunks rather than one static half each

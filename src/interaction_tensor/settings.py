@@ -18,6 +18,7 @@ CRITERIA = ("paper", "gaussian")
 KEYPOINT_SETS = ("weighted", "uniform")
 BACKENDS = ("auto", "numba", "numpy", "torch")
 KEYPOINT_ORDERS = ("adaptive", "weight")
+COMPLETE_SCORES = ("accepted", "placed")
 #: Smallest sampling spacing (m): finer sampling grows memory as 1 / spacing^2 (a 1e-6 m
 #: spacing asked for gigabytes before any check), and no scan resolves below a millimetre.
 MIN_SPACING = 1e-3
@@ -171,6 +172,17 @@ class DetectSettings:
     keypoints: str = "weighted"
     #: Stop comparing a candidate as soon as its decision is known (paper, section 4.2.1).
     early_exit: bool = True
+    #: Which pairs get a complete score (every keypoint), with ``early_exit``. ``placed``
+    #: (default): every pair stops at its decision, accepted or rejected; the placement
+    #: tests run on the decisions, and only the pairs that pass them are scored again in
+    #: full. Their scores, the predictions and the heat map are bit for bit those of
+    #: ``accepted``; a pair the score accepted that fails a placement test keeps the partial
+    #: score of its decision, as a rejected pair does (``Detection.complete`` tells which
+    #: scores are whole). ``accepted``: every pair the score accepts is scored in full (the
+    #: behaviour before 2026-11-27; with the tuned placing descriptor 99.7 % of the pairs
+    #: are accepted by the score and only 38 % of them placed, benchmarks/RESULTS.md). The
+    #: Numba backend only: the reference and torch paths score accepted pairs in full.
+    complete_scores: str = "placed"
     #: Order in which keypoints are compared. ``weight`` (default): largest weight first (the
     #: paper's, and the authors' code's). ``adaptive``: the cheapest order on a seeded pilot
     #: of this scene's own pairs (:func:`~interaction_tensor.detect.pilot_order`: the weight
@@ -304,6 +316,8 @@ class DetectSettings:
         _check_seed(self.seed)
         _check(self.keypoint_order in KEYPOINT_ORDERS,
                f"keypoint_order must be one of {KEYPOINT_ORDERS}")
+        _check(self.complete_scores in COMPLETE_SCORES,
+               f"complete_scores must be one of {COMPLETE_SCORES}")
         _check(self.pilot_pairs >= 1, "pilot_pairs must be at least 1")
         _check(self.batch_size >= 1 and self.max_scene_points >= 100,
                "batch_size and max_scene_points must be positive")

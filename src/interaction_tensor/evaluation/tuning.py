@@ -260,6 +260,8 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
                 threshold=1e-9, clearance_max_violations=1.0, contact=False, interior=False,
                 ground=False, feet=False, straddle=False, mount=False, through=False, top_k=0,
                 seed=st.seed, neighbour_cache=True,
+                # the features: every pair's full score (the threshold accepts them all)
+                complete_scores="accepted",
                 # shared by the rankings (the top candidates, the shipped tests, the
                 # chosen ones), each with detection's allowance of its own (RankingCheck),
                 # and the judged sample (far fewer pairs than one allowance)
