@@ -600,6 +600,17 @@ def _scan_list(qx, qy, qz, lists, s0, m, pts):
     return besti
 
 
+@njit(cache=True, inline="always")
+def _cached_nearest(qx, qy, qz, n, pts, starts, seed, occ, ox, oy, oz, cell, nx, ny, nz,
+                    lstart, llen, lists, scan_max):
+    """Nearest sample of q whose cache leaf is ``n`` (:func:`_leaf`): the leaf's list
+    scanned, or the grid searched when q's root block is not built or the list is longer
+    than ``scan_max``."""
+    if n >= 0 and llen[n] <= scan_max:
+        return _scan_list(qx, qy, qz, lists, lstart[n], llen[n], pts)
+    return _nearest_call(qx, qy, qz, pts, starts, seed, occ, ox, oy, oz, cell, nx, ny, nz)
+
+
 #: Keypoints whose leaves are looked up together before they are scored (the lookups of a
 #: block overlap in the memory system; at most this many are wasted by an early exit).
 LOOKAHEAD = 8
@@ -648,21 +659,18 @@ def score_cached(perm, tp, orient, offsets, prov, pnorm, weights, cos_lim, big_w
                 qy = tp[i, 1] + offsets[o, k, 1]
                 qz = tp[i, 2] + offsets[o, k, 2]
                 n = leaves[k - k0]
-                if n >= 0 and llen[n] <= scan_max:
-                    p = _scan_list(qx, qy, qz, lists, lstart[n], llen[n], pts)
-                else:
-                    p = _nearest_call(qx, qy, qz, pts, starts, seed, occ, ox, oy, oz, cell, nx, ny,
-                                      nz)
-                    if n <= -2 and nr < cap:
-                        rq = -n - 2
-                        new = True
-                        for u in range(nr):
-                            if req[j, u] == rq:
-                                new = False
-                                break
-                        if new:
-                            req[j, nr] = rq
-                            nr += 1
+                p = _cached_nearest(qx, qy, qz, n, pts, starts, seed, occ, ox, oy, oz, cell, nx,
+                                    ny, nz, lstart, llen, lists, scan_max)
+                if n <= -2 and nr < cap:          # its root block not built: ask for it
+                    rq = -n - 2
+                    new = True
+                    for u in range(nr):
+                        if req[j, u] == rq:
+                            new = False
+                            break
+                    if new:
+                        req[j, nr] = rq
+                        nr += 1
                 s += _term(qx, qy, qz, p, k, o, pts, nrm, prov, pnorm, weights, cos_lim,
                            big_w, criterion, c, a, wsum, nk, surface, rho)
                 done += 1
@@ -693,11 +701,9 @@ def nearest_many_cached(q, pts, starts, seed, occ, origin, cell, dims, ptab, pdi
     for i in prange(q.shape[0]):
         qx, qy, qz = q[i, 0], q[i, 1], q[i, 2]
         n = _leaf(qx, qy, qz, ptab, pdims, pool, bo, hb, bdims, child)
-        if n >= 0 and llen[n] <= scan_max:
-            out[i] = _scan_list(qx, qy, qz, lists, lstart[n], llen[n], pts)
-        else:
-            out[i] = _nearest_call(qx, qy, qz, pts, starts, seed, occ, origin[0], origin[1],
-                                   origin[2], cell, dims[0], dims[1], dims[2])
+        out[i] = _cached_nearest(qx, qy, qz, n, pts, starts, seed, occ, origin[0], origin[1],
+                                 origin[2], cell, dims[0], dims[1], dims[2], lstart, llen, lists,
+                                 scan_max)
 
 
 @njit(cache=True, parallel=True)

@@ -252,7 +252,8 @@ class ScoreJob:
     rho: float = 0.01
     early_exit: bool | int = True
     #: (P,) partial score and keypoint of each pair's decision: go on from there (the Numba
-    #: kernels: the scores of pairs that stopped at their decision, completed)
+    #: kernels: the scores of accepted pairs that stopped at their decision, completed;
+    #: every pair of the job is taken as accepted)
     resume_score: np.ndarray | None = None
     resume_at: np.ndarray | None = None
 
