@@ -63,7 +63,8 @@ def test_detection_rejects_accepted_pairs_that_violate_clearance():
     scene = it.prepare_scene(s, 0.01, seed=2)
     loose = it.detect(scene, t, it.DetectSettings(sample_fraction=0.5, clearance=False,
                                                   contact=False, interior=False))
-    strict = it.detect(scene, t, it.DetectSettings(sample_fraction=0.5))
+    strict = it.detect(scene, t, it.DetectSettings(sample_fraction=0.5,
+                                                   stage_order="score-first"))
     assert np.array_equal(loose.pairs.accepted, strict.score_accepted)
     assert strict.pairs.accepted.sum() < loose.pairs.accepted.sum()
     assert (strict.clearance_violations[~strict.score_accepted] == -1).all()
@@ -74,6 +75,15 @@ def test_detection_rejects_accepted_pairs_that_violate_clearance():
         st["pairs_failing_interior"] > 0
     assert st["pairs_accepted_by_score"] - st["pairs_failing_clearance"] - \
         st["pairs_failing_contact"] - st["pairs_failing_interior"] == st["pairs_accepted"]
+    # tests first (the default): every pair tested, the same pairs accepted
+    first = it.detect(scene, t, it.DetectSettings(sample_fraction=0.5))
+    np.testing.assert_array_equal(first.pairs.accepted, strict.pairs.accepted)
+    assert (first.placement >= 0).all() and (first.clearance_violations >= 0).all()
+    np.testing.assert_array_equal(first.placement == 0, first.scored)
+    ft = first.stats
+    assert ft["pairs_failing_clearance"] > st["pairs_failing_clearance"]
+    assert ft["pairs"] - ft["pairs_failing_clearance"] - ft["pairs_failing_contact"] - \
+        ft["pairs_failing_interior"] == ft["pairs_scored"] == int(first.scored.sum())
 
 
 def test_rank_pairs_is_the_exact_best_and_worst_by_full_score(bowl):
@@ -156,7 +166,8 @@ def test_completing_only_the_placed_pairs_changes_only_the_work(bowl, threshold)
 
     def run(mode):
         return it.detect(room, bowl, it.DetectSettings(sample_fraction=0.03, threshold=threshold,
-                                                       complete_scores=mode, top_k=5))
+                                                       complete_scores=mode, top_k=5,
+                                                       stage_order="score-first"))
     p, a = run("placed"), run("accepted")
     failed = a.score_accepted & (a.placement != PLACED) & (a.placement != FAILS_COLLISION)
     acc = a.pairs.accepted
@@ -183,6 +194,64 @@ def test_completing_only_the_placed_pairs_changes_only_the_work(bowl, threshold)
     # the ranking completed the failed pairs' scores in place
     assert p.complete[failed].all()
     np.testing.assert_array_equal(p.pairs.score[failed], a.pairs.score[failed])
+
+
+@pytest.mark.parametrize("threshold", [0.3, 0.6])
+def test_testing_first_changes_only_the_work(bowl, threshold):
+    """stage_order 'tests-first' (the default) gives every pair the placement tests and
+    scores only those that pass: the same final decisions, accepted scores bit for bit,
+    heat map, predictions and rankings as score-first with every accepted pair completed;
+    the same outcome of the tests wherever score-first ran them; the pairs it scored hold
+    the very scores and decisions score-first gave them; the others were never compared."""
+    from interaction_tensor.clearance import FAILS_COLLISION, PLACED, UNTESTED
+    from interaction_tensor.examples import demo
+
+    room = it.prepare_scene(demo.build().scene, 0.02, seed=0)
+
+    def run(**kw):
+        return it.detect(room, bowl, it.DetectSettings(sample_fraction=0.03, threshold=threshold,
+                                                       top_k=5, **kw))
+    t, a = run(), run(complete_scores="accepted", stage_order="score-first")
+    assert t.stats["stage_order"] == "tests-first" and a.stats["stage_order"] == "score-first"
+    acc = a.pairs.accepted
+    assert acc.sum() > 20 and (~t.scored).sum() > 50 and (~a.score_accepted).sum() > 50
+    # some pair the score rejects passes the tests: scored by tests-first, not accepted
+    assert (t.scored & ~a.score_accepted).sum() > 10
+    np.testing.assert_array_equal(t.pairs.accepted, acc)
+    np.testing.assert_array_equal(t.pairs.score[acc], a.pairs.score[acc])
+    for name in ("heat", "accepted_count"):
+        np.testing.assert_array_equal(getattr(t, name), getattr(a, name))
+    assert [(q.point_index, q.orientation_index, q.score) for q in t.predictions] == \
+        [(q.point_index, q.orientation_index, q.score) for q in a.predictions]
+    tested = a.placement != UNTESTED
+    assert not (t.placement == UNTESTED).any()
+    np.testing.assert_array_equal(t.placement[tested], a.placement[tested])
+    np.testing.assert_array_equal(t.clearance_violations[tested],
+                                  a.clearance_violations[tested])
+    np.testing.assert_array_equal(t.scored, np.isin(t.placement, (PLACED, FAILS_COLLISION)))
+    np.testing.assert_array_equal(t.score_accepted, a.score_accepted & t.scored)
+    np.testing.assert_array_equal(t.pairs.score[t.scored], a.pairs.score[t.scored])
+    np.testing.assert_array_equal(t.pairs.decided_at[t.scored], a.pairs.decided_at[t.scored])
+    assert (t.pairs.score[~t.scored] == 0).all() and (t.pairs.decided_at[~t.scored] == 0).all()
+    np.testing.assert_array_equal(t.complete, acc | (t.placement == FAILS_COLLISION)
+                                  & t.score_accepted)
+    assert t.pairs.comparisons < a.pairs.comparisons
+    assert t.stats["pairs_scored"] == int(t.scored.sum()) < t.stats["pairs"]
+    assert t.stats["pairs_tested"] == t.stats["pairs"] == len(t.pair_point)
+    for worst in (False, True):
+        got = rank_pairs(t, 5, 0.15, worst=worst, block=64)
+        want = rank_pairs(a, 5, 0.15, worst=worst, block=64)
+        for g, w in zip(got, want):
+            np.testing.assert_array_equal(g, w)
+
+
+def test_tests_first_cannot_complete_every_accepted_pair():
+    with pytest.raises(Exception, match="tests-first"):
+        it.DetectSettings(stage_order="tests-first", complete_scores="accepted")
+    assert not it.DetectSettings(complete_scores="accepted").tests_first
+    assert not it.DetectSettings(early_exit=False).tests_first
+    assert it.DetectSettings().tests_first
+    assert not it.DetectSettings(stage_order="score-first").tests_first
 
 
 def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):

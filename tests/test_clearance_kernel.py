@@ -67,3 +67,59 @@ def test_kernel_equals_reference_on_a_descriptor():
                             room, room.grid())
     assert ref.max() > 0
     np.testing.assert_array_equal(fast, ref)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_bounded_nearest_answers_within_as_the_exact_nearest(seed):
+    """``d <= r`` of the bounded search equals that of the exact nearest distance for every
+    r in [lo, hi], on clutter, for queries at surfaces, in the air, outside the grid and on
+    the samples themselves (distance 0)."""
+    from interaction_tensor._numba_clearance import nearest_within
+    from interaction_tensor.kernels import build_grid
+    from scipy.spatial import cKDTree
+
+    rng = np.random.default_rng(seed)
+    floor = np.c_[rng.uniform(0, 1, (20000, 2)), np.zeros(20000)]
+    clutter = rng.uniform(0, 1, (3000, 3)) * [1, 1, 0.6]
+    pts = np.vstack([floor, clutter])
+    grid = build_grid(pts, np.zeros_like(pts), 0.03)
+    q = np.vstack([pts[rng.integers(0, len(pts), 4000)] + rng.normal(0, 0.03, (4000, 3)),
+                   pts[:200],                                   # on a sample
+                   rng.uniform(-0.5, 1.5, (2000, 3)),            # in and outside the grid
+                   [[0.5, 0.5, -0.02], [3.0, 3.0, 3.0]]])
+    _, i = cKDTree(pts).query(q)
+    exact = np.linalg.norm(pts[i] - q, axis=1)                  # as nearest_samples
+    for lo, hi in ((0.02, 0.02), (0.01, 0.1), (0.0, 0.05), (0.03, 0.03)):
+        d = nearest_within(q, lo, hi, grid)
+        for r in np.unique(np.r_[lo, hi, np.linspace(lo, hi, 7)]):
+            np.testing.assert_array_equal(d <= r, exact <= r)
+        inner = (exact > lo) & (exact <= hi)
+        np.testing.assert_array_equal(d[inner], exact[inner])   # the exact distance there
+        assert np.isinf(d[exact > hi]).all() and (d[exact <= lo] <= lo).all()
+        assert (exact <= lo).any() and (exact > hi).any() and (inner.any() or lo == hi)
+
+
+def test_contact_and_seat_fractions_on_the_grid_equal_the_reference():
+    """The placement tests' contact and seat fractions through the bounded search equal
+    those of the cKDTree's nearest samples, for the sitting and riding examples' pairs in a
+    procedural room (touching, near and in the air)."""
+    import interaction_tensor as it
+    from interaction_tensor.clearance import contact_fractions, seat_fractions
+    from interaction_tensor.examples import interactions
+
+    room = it.prepare_scene(interactions.build("sitting-human").scene_object, 0.01, seed=0)
+    rng = np.random.default_rng(3)
+    idx = rng.integers(0, len(room.points), 3000)
+    pts = room.points[idx] + rng.normal(0, 0.05, (3000, 3)) * (rng.random((3000, 1)) < 0.5)
+    orient = rng.integers(0, 8, len(idx))
+    sit = interactions.build_descriptor("sitting-human", seed=0, spacing=0.02)
+    tests = [(0.02, 90.0), (0.1, 90.0), (0.05, 90.0)]
+    ref = contact_fractions(pts, orient, sit, tests, 8, room, None)
+    fast = contact_fractions(pts, orient, sit, tests, 8, room, room.grid())
+    assert 0 < ref[:, :, 0].mean() < 1
+    np.testing.assert_array_equal(fast, ref)
+    ride = interactions.build_descriptor("riding-human", seed=0, spacing=0.02)
+    ref = seat_fractions(pts, orient, ride, 0.03, 8, room, None)
+    fast = seat_fractions(pts, orient, ride, 0.03, 8, room, room.grid())
+    assert (ref > 0).any() and (ref < 1).any()
+    np.testing.assert_array_equal(fast, ref)

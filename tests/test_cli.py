@@ -185,6 +185,21 @@ def test_detect_json_summary_and_unwritable_outputs(tmp_path, capsys):
     summary = json.loads(out[0])
     assert summary["pairs_scored"] > 0 and summary["output"] == str(tmp_path / "out")
     assert len(summary["predictions"]) >= 1
+    assert summary["stage_order"] == "tests-first"
+    assert summary["pairs_tested"] == summary["pairs"] >= summary["pairs_scored"]
+    # the other order: the same predictions, every pair scored
+    assert main(["detect", str(tmp_path / "s.ply"), str(tmp_path / "c.npz"), "-o",
+                 str(tmp_path / "out2"), "--json", "--sample-fraction", "0.2",
+                 "--stage-order", "score-first"]) == 0
+    other = json.loads(capsys.readouterr().out.strip().splitlines()[0])
+    assert other["stage_order"] == "score-first" and other["pairs_scored"] == other["pairs"]
+    assert other["predictions"] == summary["predictions"]
+    # a contradiction is one line and status 2
+    assert main(["detect", str(tmp_path / "s.ply"), str(tmp_path / "c.npz"), "-o",
+                 str(tmp_path / "out3"), "--stage-order", "tests-first",
+                 "--complete-scores", "accepted"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "tests-first" in err and "Traceback" not in err
     # unwritable outputs: one line naming the path, status 2, no traceback
     (tmp_path / "file").write_text("x")
     for target in (str(tmp_path / "file" / "c.npz"), str(tmp_path / "out"), ""):

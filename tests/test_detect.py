@@ -314,7 +314,8 @@ def test_default_detection_keeps_the_papers_partial_scores(corner_tensor):
     the adaptive order (same results otherwise: the test above) keeps another."""
     scene_geometry, _ = moved_corner_scene(0.4, np.array([0.1, -0.2, 0.0]))
     scene = it.prepare_scene(scene_geometry, 0.01, seed=6)
-    det = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2))
+    det = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2,
+                                                            stage_order="score-first"))
     assert det.stats["keypoint_order"] == "weight"
     table = keypoint_table(corner_tensor, det.settings)
     ref = score_pairs(scene.points[det.pair_point], det.pair_orientation, table, scene,
@@ -324,8 +325,17 @@ def test_default_detection_keeps_the_papers_partial_scores(corner_tensor):
     np.testing.assert_array_equal(det.pairs.accepted, ref.accepted)
     np.testing.assert_array_equal(det.pairs.decided_at, ref.decided_at)
     np.testing.assert_allclose(det.pairs.score, ref.score, atol=1e-9)
+    # tests first (the default): the pairs it scores keep the very same partial scores
+    first = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2))
+    np.testing.assert_array_equal(first.pairs.accepted, det.pairs.accepted)
+    assert first.scored.any() and not first.scored.all()
+    np.testing.assert_array_equal(first.pairs.decided_at[first.scored],
+                                  ref.decided_at[first.scored])
+    np.testing.assert_allclose(first.pairs.score[first.scored], ref.score[first.scored],
+                               atol=1e-9)
     adaptive = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2,
-                                                                 keypoint_order="adaptive"))
+                                                                 keypoint_order="adaptive",
+                                                                 stage_order="score-first"))
     # the same decisions, but the rejected pairs' partial scores are another order's
     np.testing.assert_array_equal(adaptive.pair_point, det.pair_point)
     np.testing.assert_array_equal(adaptive.pairs.accepted, ref.accepted)

@@ -124,9 +124,16 @@ def test_detection_on_the_counter_room_predicts_no_one_on_the_counter(sitting):
     tensor = interactions.build_descriptor("sitting-human")
     tensor.set_acceptance(1e-3)
     on_top = np.flatnonzero(scene.points[:, 2] > 0.89)
-    loose = dict(clearance=False, contact=False, interior=False, collision=False, top_k=3)
+    loose = dict(clearance=False, contact=False, interior=False, collision=False, top_k=3,
+                 stage_order="score-first")
     det = it.detect(scene, tensor, it.DetectSettings(**loose), test_indices=on_top[::4])
     assert det.stats["pairs_accepted_by_score"] > 0
+    # tests first: the same placements kept, and no pair failing the feet test scored
+    first = it.detect(scene, tensor, it.DetectSettings(**{**loose, "stage_order": "auto"}),
+                      test_indices=on_top[::4])
+    np.testing.assert_array_equal(first.pairs.accepted, det.pairs.accepted)
+    assert first.stats["pairs_scored"] == len(first.pair_point) - \
+        first.stats["pairs_failing_feet"] < len(first.pair_point)
     # the feet are 47.5 cm above the floor wherever the seat is on the top: the only
     # placements kept have them inside the counter (its faces within reach; the legs go
     # through it: the clearance and collision tests' business, off here)

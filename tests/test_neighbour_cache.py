@@ -195,7 +195,9 @@ def test_the_auto_cache_has_a_floor_whatever_the_scene_size(monkeypatch):
     t = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1))
     scene = it.prepare_scene(s, 0.01, seed=2)
     it.detect(scene, t, it.DetectSettings(sample_fraction=0.4))
-    # the decisions, then the completion of the placed pairs' scores
-    assert seen == [det_mod.CACHE_AUTO_FLOOR] * 2 and det_mod.CACHE_AUTO_FLOOR >= 32 * 2**20
+    assert seen == [det_mod.CACHE_AUTO_FLOOR] and det_mod.CACHE_AUTO_FLOOR >= 32 * 2**20
+    # score first: the decisions, then the completion of the placed pairs' scores
+    it.detect(scene, t, it.DetectSettings(sample_fraction=0.4, stage_order="score-first"))
+    assert seen == [det_mod.CACHE_AUTO_FLOOR] * 3
     assert det_mod.CACHE_AUTO_BYTES_PER_POINT * 10**8 > kernels.CACHE_BYTES >= \
         det_mod.CACHE_AUTO_FLOOR

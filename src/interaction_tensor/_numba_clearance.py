@@ -206,3 +206,75 @@ def boxes(at, rot, box, grid) -> np.ndarray:
                  np.asarray(grid.origin, np.float64), float(grid.cell),
                  np.asarray(grid.dims, np.int64), out)
     return out.astype(bool)
+
+
+@njit(cache=True, inline="always")
+def _scan_within(qx, qy, qz, s0, s1, pts, best):
+    """The least distance (m) from q of samples ``s0:s1`` and ``best``."""
+    for p in range(s0, s1):
+        dx = pts[p, 0] - qx
+        dy = pts[p, 1] - qy
+        dz = pts[p, 2] - qz
+        d = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if d < best:
+            best = d
+    return best
+
+
+@njit(cache=True, parallel=True)
+def bounded_nearest(q, lo, hi, pts, starts, origin, cell, dims, out):
+    """out[i] = the distance of query i's nearest sample when it lies in (lo, hi], some
+    distance <= lo when one does (the query stops there), inf when none lies within hi.
+    Whether the nearest sample lies within any r in [lo, hi] is then ``out <= r``, as for
+    the exact nearest distance. The query's own cell is scanned first (a contact point
+    touching a surface stops there), then the other cells that meet the ball of ``hi``;
+    the distance is numpy's ``norm(p - q)`` (the same sums, in the same order)."""
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    nx, ny, nz = dims[0], dims[1], dims[2]
+    for i in prange(q.shape[0]):
+        qx, qy, qz = q[i, 0], q[i, 1], q[i, 2]
+        best = math.inf
+        ci = int(math.floor((qx - ox) / cell))
+        cj = int(math.floor((qy - oy) / cell))
+        ck = int(math.floor((qz - oz) / cell))
+        own = ci >= 0 and ci < nx and cj >= 0 and cj < ny and ck >= 0 and ck < nz
+        if own:
+            c = (ci * ny + cj) * nz + ck
+            best = _scan_within(qx, qy, qz, starts[c], starts[c + 1], pts, best)
+        if best > lo:
+            i0, i1 = _span(qx, hi, ox, cell, nx)
+            j0, j1 = _span(qy, hi, oy, cell, ny)
+            k0, k1 = _span(qz, hi, oz, cell, nz)
+            for a in range(i0, i1 + 1):
+                if best <= lo:
+                    break
+                gx = max(ox + a * cell - qx, qx - (ox + (a + 1) * cell), 0.0)
+                for b in range(j0, j1 + 1):
+                    if best <= lo:
+                        break
+                    gy = max(oy + b * cell - qy, qy - (oy + (b + 1) * cell), 0.0)
+                    base = (a * ny + b) * nz
+                    for c in range(k0, k1 + 1):
+                        if own and a == ci and b == cj and c == ck:
+                            continue
+                        gz = max(oz + c * cell - qz, qz - (oz + (c + 1) * cell), 0.0)
+                        # a cell whose box lies beyond the ball (with 1 um of slack
+                        # against rounding of the box's edges) holds no sample within hi
+                        if gx * gx + gy * gy + gz * gz > (hi + 1e-6) * (hi + 1e-6):
+                            continue
+                        best = _scan_within(qx, qy, qz, starts[base + c],
+                                            starts[base + c + 1], pts, best)
+                        if best <= lo:
+                            break
+        out[i] = best if best <= hi else math.inf
+
+
+def nearest_within(q, lo: float, hi: float, grid) -> np.ndarray:
+    """(Q,) :func:`bounded_nearest` of queries ``q`` (Q, 3) on ``grid``."""
+    q = np.ascontiguousarray(q, np.float64).reshape(-1, 3)
+    out = np.empty(len(q))
+    if len(q):
+        bounded_nearest(q, float(lo), float(hi), grid.points, grid.starts,
+                        np.asarray(grid.origin, np.float64), float(grid.cell),
+                        np.asarray(grid.dims, np.int64), out)
+    return out

@@ -200,6 +200,17 @@ def nearest_samples(queries: np.ndarray, scene, grid=None):
     return np.linalg.norm(scene.points[i] - q, axis=1), i
 
 
+def _within(queries, lo: float, hi: float, grid) -> np.ndarray:
+    """(Q,) distances of queries (..., 3) to the nearest scene sample where it lies within
+    ``hi`` and beyond ``lo``, some distance up to ``lo`` where one lies that near, inf where
+    none lies within ``hi`` (``_numba_clearance.bounded_nearest``): ``d <= r`` for any r in
+    [lo, hi] is then exactly :func:`nearest_samples`' answer, without searching farther
+    than ``hi`` (a contact point in the air searched far for its nearest sample)."""
+    from . import _numba_clearance
+
+    return _numba_clearance.nearest_within(queries, lo, hi, grid)
+
+
 def contact_fractions(points, orient, tensor, tests, n_orientations: int, scene,
                       grid=None, chunk: int = 8192) -> np.ndarray:
     """(P, T, G) float64: per placement, contact test ``tests[t]`` = (distance m, angle
@@ -221,10 +232,16 @@ def contact_fractions(points, orient, tensor, tests, n_orientations: int, scene,
     member = groups[None, :] == np.arange(n_g)[:, None]                       # (G, K)
     points = np.asarray(points, float)
     orient = np.asarray(orient, np.int64)
+    # distances alone (no angle test) on the grid: whether a sample lies within each
+    # test's distance, which a search bounded by the largest stops at (_numba_clearance)
+    bounded = grid is not None and all(a >= 90 for _, a in tests)
     for s in range(0, len(points), chunk):
         o = orient[s:s + chunk]
         q = points[s:s + chunk, None, :] + offsets[o]                          # (p, K, 3)
-        d, i = nearest_samples(q.reshape(-1, 3), scene, grid)
+        if bounded:
+            d = _within(q, min(t[0] for t in tests), max(t[0] for t in tests), grid)
+        else:
+            d, i = nearest_samples(q.reshape(-1, 3), scene, grid)
         d = d.reshape(q.shape[:2])
         cos = None
         if any(a < 90 for _, a in tests):
@@ -273,7 +290,8 @@ def seat_fractions_at(rot, shift, tensor, distance: float, scene, grid=None) -> 
     if len(region) == 0 or len(rot) == 0:
         return np.ones(len(rot))
     q = np.einsum("pij,kj->pki", rot, region) + np.asarray(shift, float).reshape(-1, 1, 3)
-    d, _ = nearest_samples(q.reshape(-1, 3), scene, grid)
+    d = (_within(q, distance, distance, grid) if grid is not None
+         else nearest_samples(q.reshape(-1, 3), scene, grid)[0])
     return (d.reshape(q.shape[:2]) <= distance).mean(axis=1)
 
 

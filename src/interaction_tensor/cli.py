@@ -60,6 +60,12 @@ def detection_options(p) -> None:
                    help="which pairs are scored over every keypoint: those that pass the "
                         "placement tests (default: every pair stops at its decision) or every "
                         "pair the score accepts (the same predictions, slower)")
+    p.add_argument("--stage-order", choices=("auto", "tests-first", "score-first"),
+                   default="auto",
+                   help="run the placement tests on every pair and score only those that pass "
+                        "(tests-first), or score every pair and test those the score accepts "
+                        "(score-first); the same predictions. auto (default): tests-first "
+                        "unless --complete-scores accepted or --no-early-exit")
     p.add_argument("--no-clearance", action="store_true",
                    help="skip the clearance test (the scene nearer the object than in the "
                         "example)")
@@ -183,7 +189,7 @@ _SETTING_OPTIONS = {
     "scene_spacing": "spacing", "normal_tolerance_deg": "normal_tolerance",
     "oriented_normals": "oriented_normals", "nms_radius": "nms_radius", "backend": "backend",
     "device": "device", "keypoint_order": "keypoint_order",
-    "complete_scores": "complete_scores"}
+    "complete_scores": "complete_scores", "stage_order": "stage_order"}
 
 
 def _detect_settings(args):
@@ -241,14 +247,23 @@ def _report(args, result, outdir) -> None:
                    "affordance normal, so nothing was scored")
     rate = st.get("candidates_per_second")
     done = st["seconds"].get("completion")
-    _say(args, f"scored {st['pairs_scored']} (point, orientation) pairs in "
-               f"{st['scoring_seconds']:.2f} s"
-               f"{f' (of them {done:.2f} s completing the placed pairs)' if done else ''}"
-               f"{f' ({rate:,.0f} candidates/s)' if rate else ''} ({st['backend']}"
-               f"{' on ' + st['device'] if st['backend'] == 'torch' else ''}); "
-               f"{st['mean_comparisons_per_decision']:.0f} keypoint comparisons per decision")
-    _say(args, f"accepted {st['pairs_accepted']} of the {st['pairs_accepted_by_score']} the "
-               f"score accepted (placement tests failed: clearance "
+    tests_s = st["seconds"].get("clearance", 0)
+    first = st.get("stage_order") == "tests-first"
+    tested = (f"placement tests of all {st['pairs']} pairs in {tests_s:.2f} s, then "
+              if first else "")
+    _say(args, f"decided {st['pairs']} (point, orientation) pairs in "
+               f"{st['deciding_seconds']:.2f} s{f' ({rate:,.0f} candidates/s)' if rate else ''}"
+               f": {tested}scored {st['pairs_scored']}"
+               f"{' that passed them' if first else ''} in {st['scoring_seconds']:.2f} s"
+               f"{f' (of them {done:.2f} s completing the placed pairs)' if done else ''} "
+               f"({st['backend']}{' on ' + st['device'] if st['backend'] == 'torch' else ''})"
+               f"{'' if first else f', placement tests in {tests_s:.2f} s'}; "
+               f"{st['mean_comparisons_per_decision']:.0f} keypoint comparisons per "
+               f"{'scored pair' if first else 'decision'}")
+    of_what = (f"{st['pairs_scored']} that passed the placement tests" if first else
+               f"{st['pairs_accepted_by_score']} the score accepted")
+    _say(args, f"accepted {st['pairs_accepted']} of the {of_what} (placement tests failed: "
+               f"clearance "
                f"{st['pairs_failing_clearance']}, contact {st['pairs_failing_contact']}, "
                f"interior {st['pairs_failing_interior']}, ground "
                f"{st['pairs_failing_ground']}, feet {st['pairs_failing_feet']}, straddle "
@@ -282,7 +297,9 @@ def summary(result, outdir) -> dict:
             "affordance": result.tensor.affordance, "threshold": result.threshold,
             "scene_points": st["scene_points"], "test_points_sampled": st["test_points_sampled"],
             "candidates": st["candidates_after_normal_filter"],
-            "pairs_scored": st["pairs_scored"], "pairs_accepted": st["pairs_accepted"],
+            "stage_order": st["stage_order"], "pairs": st["pairs"],
+            "pairs_scored": st["pairs_scored"], "pairs_tested": st["pairs_tested"],
+            "pairs_accepted": st["pairs_accepted"],
             "pairs_accepted_by_score": st["pairs_accepted_by_score"],
             **{k: st[k] for k in ("pairs_failing_clearance", "pairs_failing_contact",
                                   "pairs_failing_interior", "pairs_failing_ground", "pairs_failing_feet",

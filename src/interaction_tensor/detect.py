@@ -1,8 +1,10 @@
 """Detection: candidate test points, the scoring loop, and the result.
 
 Data flow: scene -> test points (seeded random fraction) -> normal filter against N_aff ->
-scores per (test point, orientation), keypoints in weight order with early exit ->
-:class:`Detection` (accepted pairs, heat map, top-k poses, statistics).
+placement tests of every (test point, orientation) pair -> scores of the pairs that pass
+them, keypoints in weight order with early exit -> :class:`Detection` (accepted pairs, heat
+map, top-k poses, statistics). ``DetectSettings.stage_order`` score-first scores every pair
+first and tests those the score accepts.
 """
 
 from __future__ import annotations
@@ -113,9 +115,12 @@ class Detection:
     pair_point, pair_orientation : (P,) scene index and orientation of every scored pair
     pairs : PairScores of those pairs; ``pairs.accepted`` is the final decision (score and
         placement tests)
-    score_accepted : (P,) bool, accepted by the score alone
+    score_accepted : (P,) bool, accepted by the score alone (False for a pair never scored:
+        ``DetectSettings.stage_order`` tests-first scores only the pairs that pass the
+        placement tests, see ``scored``)
     clearance_violations : (P,) int16 (int32 past 32,767 clearance points), clearance points
-        violated (-1 where not tested: pairs the score rejected, or no clearance test); on
+        violated (-1 where not tested: score-first, pairs the score rejected; or no
+        clearance test); on
         the Numba backend counted up to the first past the limit (a pair that fails the
         test holds the limit's count + 1)
     placement : (P,) int8, the outcome of the placement tests (see the attribute)
@@ -143,15 +148,20 @@ class Detection:
     #: (N + 1,) the largest score keypoints k.. can still add, in the order they were
     #: compared: ``score + rest[decided_at]`` bounds a rejected pair's full score
     rest: np.ndarray | None = None
-    #: (P,) int8 outcome of the placement tests: -1 not tested (the score rejected the
-    #: pair), 0 placed, else the first test failed (1 clearance, 2 contact, 3 interior,
-    #: 4 collision: :mod:`.clearance`; the collision test runs on ranked pairs only)
+    #: (P,) int8 outcome of the placement tests: -1 not tested (score-first: the score
+    #: rejected the pair; tests-first tests every pair), 0 placed, else the first test
+    #: failed (1 clearance, 2 contact, 3 interior, 4 collision, ...: :mod:`.clearance`; the
+    #: collision test runs on ranked pairs only)
     placement: np.ndarray | None = None
     #: the collision test of ranked pairs (:class:`CollisionCheck`), None until built
     collisions: "CollisionCheck | None" = field(default=None, repr=False)
     #: (P,) bool: pairs whose score covers every keypoint (the others hold the partial sum
     #: at their decision, ``DetectSettings.complete_scores``); None: those the score accepted
     complete: np.ndarray | None = None
+    #: (P,) bool: pairs that were scored at all (``DetectSettings.stage_order``
+    #: ``tests-first`` scores only the pairs that pass the placement tests; the others hold
+    #: score 0, decided at 0, and ``score_accepted`` False); None: every pair
+    scored: np.ndarray | None = None
 
     @property
     def accepted(self) -> np.ndarray:
@@ -554,16 +564,37 @@ def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_or
     return score_acc, viol, outcome
 
 
+def test_all(scene, tensor, settings: DetectSettings, pair_point, pair_orient, grid=None):
+    """The placement tests (:func:`.clearance.check_placements`) of every pair, before any
+    score (``DetectSettings.stage_order`` ``tests-first``). Returns (clearance violations
+    (P,) int, -1 where the clearance test is off; outcome (P,) int8:
+    :data:`.clearance.PLACED` or the first test failed)."""
+    from .clearance import check_placements
+
+    k = len(tensor.clearance_points)
+    n = len(pair_point)
+    viol = np.full(n, -1, np.int16 if k < 2 ** 15 else np.int32)
+    outcome = np.empty(n, np.int8)
+    for s in range(0, n, 262_144):                  # bounds the gathered positions
+        sl = slice(s, s + 262_144)
+        v, outcome[sl] = check_placements(scene.points[pair_point[sl]],
+                                          np.asarray(pair_orient[sl], np.int64), tensor,
+                                          settings, scene, grid)
+        if settings.clearance and k:
+            viol[sl] = v
+    return viol, outcome
+
+
 def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair_orient,
             pairs, timings, backend, t0, device="cpu", clearance=None, rest=None,
-            complete=None) -> Detection:
+            complete=None, scored=None) -> Detection:
     """Top-k with suppression (placements that reach it tested for collision), heat map,
     statistics."""
     score_acc, viol, outcome = (clearance if clearance is not None
                                 else (pairs.accepted.copy(), None, None))
     det = Detection(scene, tensor, settings, threshold, test_idx, cand, pair_point,
                     pair_orient, pairs, None, None, [], {}, score_acc, viol, rest, outcome,
-                    complete=complete)
+                    complete=complete, scored=scored)
     n_o = settings.n_orientations
     t3 = time.perf_counter()
     radius = suppression_radius(tensor, settings)
@@ -583,19 +614,29 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
     det.heat, det.accepted_count = heat_map(scene, pair_point, pairs.score, pairs.accepted)
     timings["predictions"] = time.perf_counter() - t3
     timings["total"] = time.perf_counter() - t0
-    decided = pairs.decided_at
+    decided = pairs.decided_at if scored is None else pairs.decided_at[scored]
+    acc_scored = pairs.accepted if scored is None else pairs.accepted[scored]
     from .clearance import (FAILS_CLEARANCE, FAILS_CONTACT, FAILS_FEET, FAILS_GROUND,
                             FAILS_INTERIOR, FAILS_MOUNT, FAILS_STRADDLE, FAILS_THROUGH)
 
     def failing(code):
         return int((outcome == code).sum()) if outcome is not None else 0
     scoring_s = timings.get("scoring", 0) + timings.get("completion", 0)
+    # every pair decided: scored (to its decision, the placed ones completed) and tested
+    deciding_s = scoring_s + timings.get("clearance", 0)
     det.stats.update({
         "scene_points": int(len(scene)),
         "scene_notes": list(getattr(scene, "notes", [])),
         "test_points_sampled": int(len(test_idx)),
         "candidates_after_normal_filter": int(len(cand)),
-        "pairs_scored": int(len(pair_point)),
+        "stage_order": "tests-first" if scored is not None else "score-first",
+        # (point, orientation) pairs decided; of them scored (tests-first: those that
+        # passed the placement tests) and given the placement tests (score-first: those
+        # the score accepted)
+        "pairs": int(len(pair_point)),
+        "pairs_scored": int(len(pair_point) if scored is None else scored.sum()),
+        "pairs_tested": int(len(pair_point) if scored is not None
+                            else (outcome != -1).sum() if outcome is not None else 0),
         "pairs_accepted": int(pairs.accepted.sum()),
         "pairs_accepted_by_score": int(score_acc.sum()),
         "pairs_failing_clearance": failing(FAILS_CLEARANCE),
@@ -610,10 +651,10 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
         "keypoint_comparisons": int(pairs.comparisons),
         "keypoint_comparisons_to_decision": int(decided.sum()),
         "mean_comparisons_per_decision": float(decided.mean()) if len(decided) else 0.0,
-        "mean_comparisons_to_accept": (float(decided[pairs.accepted].mean())
-                                       if pairs.accepted.any() else None),
-        "mean_comparisons_to_reject": (float(decided[~pairs.accepted].mean())
-                                       if (~pairs.accepted).any() else None),
+        "mean_comparisons_to_accept": (float(decided[acc_scored].mean())
+                                       if acc_scored.any() else None),
+        "mean_comparisons_to_reject": (float(decided[~acc_scored].mean())
+                                       if (~acc_scored).any() else None),
         "threshold": threshold,
         "backend": backend,
         "device": device,
@@ -622,11 +663,15 @@ def _finish(scene, tensor, settings, threshold, test_idx, cand, pair_point, pair
         "pairs_completed": int(complete.sum()) if complete is not None else None,
         # the scoring stage: the decisions, then the placed pairs' scores completed
         "scoring_seconds": round(scoring_s, 4),
+        # the scoring stage and the placement tests: every pair's final decision
+        "deciding_seconds": round(deciding_s, 4),
         # rates count the work done: candidates (test points past the normal filter, all
-        # orientations decided, the placed pairs' scores completed) and (point,
-        # orientation) pairs scored, never sampled points
-        "candidates_per_second": (float(len(cand) / scoring_s) if scoring_s > 0 else None),
-        "pairs_per_second": (float(len(pair_point) / scoring_s) if scoring_s > 0 else None),
+        # orientations decided by the score and the placement tests, the placed pairs'
+        # scores complete) and (point, orientation) pairs decided, never sampled points;
+        # over the time of both stages (since 2026-11-27: tests-first scores only the pairs
+        # the tests pass, so the scoring stage alone decides only those)
+        "candidates_per_second": (float(len(cand) / deciding_s) if deciding_s > 0 else None),
+        "pairs_per_second": (float(len(pair_point) / deciding_s) if deciding_s > 0 else None),
     })
     return det
 
@@ -681,14 +726,30 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     timings["candidates"] = time.perf_counter() - t0
     t1 = time.perf_counter()
     backend, index = _prepare_index(scene, settings)
-    # the Numba kernels stop every pair at its decision; the pairs that pass the placement
-    # tests are scored in full afterwards (DetectSettings.complete_scores)
-    decide_first = (settings.early_exit and settings.complete_scores == "placed"
-                    and backend == "numba")
+    tests_first = settings.tests_first
+    # score-first: the Numba kernels stop every pair at its decision; the pairs that pass
+    # the placement tests are scored in full afterwards (DetectSettings.complete_scores).
+    # tests-first: only the pairs that passed the tests are scored, accepted ones in full
+    decide_first = (not tests_first and settings.early_exit
+                    and settings.complete_scores == "placed" and backend == "numba")
     for job in jobs:
         job.early_exit = (EXIT_AT_DECISION if decide_first
                           else EXIT_AT_REJECTION if settings.early_exit else EXIT_NEVER)
     timings["index"] = time.perf_counter() - t1
+    grid = index if backend == "numba" else None
+    scored = [None] * len(jobs)
+    if tests_first:
+        t3 = time.perf_counter()
+        tested = [test_all(scene, tensor, settings, pp, po, grid)
+                  for tensor, pp, po in zip(tensors, pp_list, po_list)]
+        timings["clearance"] = time.perf_counter() - t3
+        from .clearance import PLACED
+
+        scored = [outcome == PLACED for _, outcome in tested]
+        keep = [np.flatnonzero(m) for m in scored]
+        full_jobs = jobs
+        jobs = [ScoreJob(job.points[i], job.orient[i], job.table, job.threshold, job.vectors,
+                         job.rho, job.early_exit) for job, i in zip(jobs, keep)]
     if settings.keypoint_order == "adaptive":
         t1 = time.perf_counter()
         for job in jobs:
@@ -705,35 +766,55 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     budget = (min(CACHE_BYTES, max(CACHE_AUTO_FLOOR, CACHE_AUTO_BYTES_PER_POINT * len(scene)))
               if auto else CACHE_BYTES)
     scores = _score_all(scene, jobs, backend, index, settings, progress, label, use_cache,
-                        budget)
+                        budget, grouped=not tests_first)
     if use_cache and auto:
-        # auto: its memory goes back before the placement tests (the completion builds
-        # what it needs again: 581 MB peak against 744 MB kept, a 2 M-point cloud,
-        # benchmarks/memory.py) and export
+        # auto: its memory goes back after the scoring, before score-first's placement
+        # tests (the completion builds what it needs again: 581 MB peak against 744 MB
+        # kept, a 2 M-point cloud, benchmarks/memory.py) and export
         index.cache = None
     timings["scoring"] = time.perf_counter() - t2
-    t3 = time.perf_counter()
-    grid = index if backend == "numba" else None
-    clear = [check_clearance(scene, tensor, settings, pp, po, pairs, grid)
-             for tensor, pp, po, pairs in zip(tensors, pp_list, po_list, scores)]
-    timings["clearance"] = time.perf_counter() - t3
-    if decide_first:
-        t4 = time.perf_counter()
-        complete = _complete_placed(scene, jobs, scores, backend, index, settings, progress,
-                                    label, use_cache, budget)
-        if use_cache and auto:
-            index.cache = None
-        timings["completion"] = time.perf_counter() - t4
-    elif settings.early_exit:
-        complete = [cl[0].copy() for cl in clear]            # accepted by the score
+    if tests_first:
+        # back to every pair: those that failed a test were never scored; the accepted ones
+        # were scored in full (stopped only at a rejection)
+        scores = [_scattered(pairs, m, i) for pairs, m, i in zip(scores, scored, keep)]
+        clear = [(pairs.accepted.copy(), viol, outcome)
+                 for pairs, (viol, outcome) in zip(scores, tested)]
+        complete = [pairs.accepted.copy() if settings.early_exit else m.copy()
+                    for pairs, m in zip(scores, scored)]
+        jobs = full_jobs
     else:
-        complete = [np.ones(len(pp), bool) for pp in pp_list]
+        t3 = time.perf_counter()
+        clear = [check_clearance(scene, tensor, settings, pp, po, pairs, grid)
+                 for tensor, pp, po, pairs in zip(tensors, pp_list, po_list, scores)]
+        timings["clearance"] = time.perf_counter() - t3
+        if decide_first:
+            t4 = time.perf_counter()
+            complete = _complete_placed(scene, jobs, scores, backend, index, settings,
+                                        progress, label, use_cache, budget)
+            if use_cache and auto:
+                index.cache = None
+            timings["completion"] = time.perf_counter() - t4
+        elif settings.early_exit:
+            complete = [cl[0].copy() for cl in clear]            # accepted by the score
+        else:
+            complete = [np.ones(len(pp), bool) for pp in pp_list]
     device = str(index.device) if backend == "torch" else "cpu"
     return [_finish(scene, tensor, settings, job.threshold, test_idx, cand, pp, po, pairs,
-                    dict(timings), backend, t0, device, cl, job.table.rest, cm)
-            for tensor, job, cand, pp, po, pairs, cl, cm in zip(tensors, jobs, cands, pp_list,
-                                                                po_list, scores, clear,
-                                                                complete)]
+                    dict(timings), backend, t0, device, cl, job.table.rest, cm, sc)
+            for tensor, job, cand, pp, po, pairs, cl, cm, sc in zip(
+                tensors, jobs, cands, pp_list, po_list, scores, clear, complete, scored)]
+
+
+def _scattered(pairs: PairScores, scored: np.ndarray, idx: np.ndarray) -> PairScores:
+    """PairScores of every pair from those of the scored pairs ``idx`` (``scored`` their
+    (P,) mask): the others hold score 0, not accepted, decided at 0."""
+    score = np.zeros(len(scored))
+    score[idx] = pairs.score
+    accepted = np.zeros(len(scored), bool)
+    accepted[idx] = pairs.accepted
+    at = np.zeros(len(scored), np.asarray(pairs.decided_at).dtype)
+    at[idx] = pairs.decided_at
+    return PairScores(score, accepted, at, pairs.comparisons)
 
 
 def _complete_placed(scene, jobs, scores, backend, index, settings, progress, label,
@@ -911,7 +992,10 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     # scored best partial score first (for the worst, lowest): a run that accepted nothing
     # rejected every pair where its bound fell just below the threshold, so the bounds of
     # all its pairs are equal and only the partial scores tell the promising ones
-    bound = -score if worst else upper + 2.0
+    # (a pair known to fail a test, as every one tests-first did not score, gets no 2)
+    may_place = (np.ones(n, bool) if det.placement is None
+                 else (det.placement == PLACED) | (det.placement == UNTESTED))
+    bound = -score if worst else upper + np.where(may_place, 2.0, 0.0)
     left = np.flatnonzero(~known)
     order = left[np.lexsort(((score if worst else -score)[left], -bound[left]))]
     m = len(order)

@@ -19,6 +19,7 @@ KEYPOINT_SETS = ("weighted", "uniform")
 BACKENDS = ("auto", "numba", "numpy", "torch")
 KEYPOINT_ORDERS = ("adaptive", "weight")
 COMPLETE_SCORES = ("accepted", "placed")
+STAGE_ORDERS = ("auto", "score-first", "tests-first")
 #: Smallest sampling spacing (m): finer sampling grows memory as 1 / spacing^2 (a 1e-6 m
 #: spacing asked for gigabytes before any check), and no scan resolves below a millimetre.
 MIN_SPACING = 1e-3
@@ -173,7 +174,9 @@ class DetectSettings:
     #: Stop comparing a candidate as soon as its decision is known (paper, section 4.2.1).
     early_exit: bool = True
     #: Which pairs get a complete score (every keypoint), with ``early_exit``. ``placed``
-    #: (default): every pair stops at its decision, accepted or rejected; the placement
+    #: (default): with ``stage_order`` tests-first, the pairs the score accepts, of those
+    #: that passed the tests (the only ones scored). With score-first, every pair stops at
+    #: its decision, accepted or rejected; the placement
     #: tests run on the decisions, and only the pairs that pass them are scored again in
     #: full. Their scores, the predictions and the heat map are bit for bit those of
     #: ``accepted``; a pair the score accepted that fails a placement test keeps the partial
@@ -183,6 +186,20 @@ class DetectSettings:
     #: are accepted by the score and only 38 % of them placed, benchmarks/RESULTS.md). The
     #: Numba backend only: the reference and torch paths score accepted pairs in full.
     complete_scores: str = "placed"
+    #: Which comes first, the score or the placement tests. ``tests-first``: every pair gets
+    #: the placement tests, and only the pairs that pass them are scored, stopping at a
+    #: rejection (an accepted pair is scored over every keypoint). The keypoints, their order
+    #: and the running sum are those of ``score-first``, so the decisions, the accepted
+    #: scores (bit for bit), the heat map and the predictions are the same; a pair that fails
+    #: a test is never scored (score 0, ``Detection.scored`` False) and its placement outcome
+    #: is known whatever its score. ``score-first``: every pair is scored to its decision and
+    #: the tests run on the pairs the score accepts (the only order before 2026-11-27).
+    #: ``auto`` (default): ``tests-first``, unless ``complete_scores`` is ``accepted`` or
+    #: ``early_exit`` is off, which ask for the scores of pairs whatever their tests. With
+    #: the tuned descriptors the score accepts nearly every pair and the tests reject most:
+    #: on kitchen3 at 30 % 16 % of the 8 examples' pairs pass the tests
+    #: (benchmarks/RESULTS.md).
+    stage_order: str = "auto"
     #: Order in which keypoints are compared. ``weight`` (default): largest weight first (the
     #: paper's, and the authors' code's). ``adaptive``: the cheapest order on a seeded pilot
     #: of this scene's own pairs (:func:`~interaction_tensor.detect.pilot_order`: the weight
@@ -318,12 +335,25 @@ class DetectSettings:
                f"keypoint_order must be one of {KEYPOINT_ORDERS}")
         _check(self.complete_scores in COMPLETE_SCORES,
                f"complete_scores must be one of {COMPLETE_SCORES}")
+        _check(self.stage_order in STAGE_ORDERS, f"stage_order must be one of {STAGE_ORDERS}")
+        _check(not (self.stage_order == "tests-first" and self.complete_scores == "accepted"),
+               "stage_order 'tests-first' never scores a pair that fails a placement test, "
+               "so it cannot complete every pair the score accepts (complete_scores "
+               "'accepted'): use stage_order 'score-first' or 'auto'")
         _check(self.pilot_pairs >= 1, "pilot_pairs must be at least 1")
         _check(self.batch_size >= 1 and self.max_scene_points >= 100,
                "batch_size and max_scene_points must be positive")
 
     def to_dict(self) -> dict:
         return {f.name: getattr(self, f.name) for f in fields(self)}
+
+    @property
+    def tests_first(self) -> bool:
+        """Whether detection runs the placement tests before the score (``stage_order``,
+        ``auto`` resolved)."""
+        if self.stage_order == "auto":
+            return self.early_exit and self.complete_scores == "placed"
+        return self.stage_order == "tests-first"
 
     def for_scene(self, scene) -> "DetectSettings":
         """These settings with the defaults that depend on the scene filled in: the criterion
