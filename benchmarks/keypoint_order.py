@@ -41,7 +41,7 @@ def compare(name: str, scene_name: str) -> float:
                                                          keypoint_order=order))
         st = det.stats
         res[order] = det
-        sc = st["scoring_seconds"]
+        sc = st["deciding_seconds"]
         print(f"{name} on {scene_name}, {order}: scoring {sc:.1f} s (pilot "
               f"{st['seconds'].get('keypoint_order', 0):.2f} s), "
               f"{st['candidates_after_normal_filter']} candidates, "
@@ -52,7 +52,7 @@ def compare(name: str, scene_name: str) -> float:
     acc = w.pairs.accepted
     same_pred = ([(p.point_index, p.orientation_index) for p in a.predictions]
                  == [(p.point_index, p.orientation_index) for p in w.predictions])
-    ratio = w.stats["scoring_seconds"] / a.stats["scoring_seconds"]
+    ratio = w.stats["deciding_seconds"] / a.stats["deciding_seconds"]
     print(f"identical decisions: {np.array_equal(a.pairs.accepted, acc)}; largest accepted "
           f"score difference: {np.abs(a.pairs.score[acc] - w.pairs.score[acc]).max(initial=0)}; "
           f"identical predictions: {same_pred}; adaptive against weight: {ratio:.2f}x",

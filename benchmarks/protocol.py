@@ -56,10 +56,12 @@ def main() -> None:
         dets = it.detect_many(scene, tensors, settings)
         det_s = time.perf_counter() - t2
         cands = sum(d.stats["candidates_after_normal_filter"] for d in dets)
-        pairs = sum(d.stats["pairs_scored"] for d in dets)
+        pairs = sum(d.stats["pairs"] for d in dets)                # decided
+        scored = sum(d.stats["pairs_scored"] for d in dets)        # of them scored
         rows.append({"scene": f.stem, "points": len(scene), "prepare_s": round(prep, 2),
                      "detect_s": round(det_s, 2), "candidates": int(cands),
-                     "pairs": int(pairs), "per_example_candidates":
+                     "pairs": int(pairs), "pairs_scored": int(scored),
+                     "per_example_candidates":
                          {n: int(d.stats["candidates_after_normal_filter"])
                           for n, d in zip(names, dets)}})
         print(f"{f.stem}: {len(scene):,} points, prepared in {prep:.1f} s, 8 descriptors in "
