@@ -178,6 +178,23 @@ def test_a_cache_over_its_budget_drops_its_oldest_trees_and_stays_exact():
     assert any(e for e, _ in seen) and any(r for _, r in seen)    # both ways were taken
 
 
+def test_the_cache_arrays_grow_geometrically_up_to_the_budget():
+    """Trees added a little at a time enlarge the node and list arrays a few times, not once
+    per batch as they near the budget (each enlargement copies them), and never past it."""
+    q, s = corner_example()
+    scene = it.prepare_scene(s, 0.01, seed=2)
+    grid = scene.grid()
+    budget = 8 * 2**20
+    c = kernels.NeighbourCache(grid, grid.origin, grid.origin + 1.0, budget)
+    added = 0
+    while c._reserve(1000, 10000):
+        c.used += (1000, 10000)
+        added += 1
+        assert c.nbytes <= budget
+    assert added > 100 and c.grows <= 12
+    assert c.nbytes > 0.9 * budget - c.table_bytes      # the room was used
+
+
 def test_the_auto_cache_has_a_floor_whatever_the_scene_size(monkeypatch):
     """A small scene's auto cache gets at least CACHE_AUTO_FLOOR bytes (24 bytes a point left
     a person's search rebuilding its trees), a large one 24 bytes a point, both at most the

@@ -296,6 +296,7 @@ class NeighbourCache:
     chunks : [(first node, first entry, blocks)] of each batch of trees, oldest first (trees
         are appended, so a batch's nodes and entries run up to the next batch's)
     evictions : times the oldest trees were dropped for memory; resets : times it was emptied
+    grows : times the node or list arrays were enlarged (copied)
     """
 
     def __init__(self, grid: Grid, lo: np.ndarray, hi: np.ndarray, budget: int = CACHE_BYTES):
@@ -324,6 +325,7 @@ class NeighbourCache:
         self.chunks = []
         self.evictions = 0
         self.resets = 0
+        self.grows = 0
 
     def covers(self, lo, hi) -> bool:
         """True when the box lo..hi (m) is inside the covered box."""
@@ -444,8 +446,16 @@ class NeighbourCache:
         new_n = cap_n if need_n <= cap_n else max(need_n, 2 * cap_n)
         new_e = cap_e if need_e <= cap_e else max(need_e, 2 * cap_e)
         if table + new_n * 16 + new_e * 4 > self.budget:
-            new_n, new_e = least_n, least_e
+            # doubling would pass the budget: the arrays that must grow share what is left
+            # of it (growing them only by what this batch needs copied them again on almost
+            # every batch near the budget: 1.9 s of kitchen5's 17 s of scoring)
+            grow_n, grow_e = need_n > cap_n, need_e > cap_e
+            spare = (self.budget - table - least_n * 16 - least_e * 4) // (
+                2 if grow_n and grow_e else 1)
+            new_n = least_n + (spare // 16 if grow_n else 0)
+            new_e = least_e + (spare // 4 if grow_e else 0)
         n0, e0 = int(self.used[0]), int(self.used[1])
+        self.grows += 1
         if new_n > cap_n:
             for name, fill in (("child", -1), ("lstart", 0), ("llen", 0)):
                 old = getattr(self, name)
