@@ -20,6 +20,7 @@ from .predictions import Prediction, heat_map, top_k
 from .scene import Scene
 from .kernels import (CACHE_BYTES, EXIT_AT_DECISION, EXIT_AT_REJECTION, EXIT_NEVER, ScoreJob,
                       score_jobs)
+from .kernels import available as kernels_available
 from .scoring import PairScores, all_terms, make_table, permuted, score_pairs
 from .settings import DetectSettings
 
@@ -736,7 +737,11 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
         job.early_exit = (EXIT_AT_DECISION if decide_first
                           else EXIT_AT_REJECTION if settings.early_exit else EXIT_NEVER)
     timings["index"] = time.perf_counter() - t1
-    grid = index if backend == "numba" else None
+    # the placement tests on the Numba grid where Numba imports, whichever backend scores
+    # (exact either way: the cKDTree is their reference); the torch backend's tests ran on
+    # the cKDTree before, slower than its scoring on a GPU
+    grid = (index if backend == "numba"
+            else scene.grid() if backend == "torch" and kernels_available() else None)
     scored = [None] * len(jobs)
     if tests_first:
         t3 = time.perf_counter()
