@@ -2,7 +2,7 @@
 most 3x one), in one process.
 
     python benchmarks/many_vs_one.py [--scene kitchen5] [--one placing-bowl]
-        [--fraction 0.3] [--repeats 1]
+        [--fraction 0.3] [--repeats 1] [--each]
 
 The 8 example descriptors are trained as ``itensor evaluate`` trains them (real query
 objects from ``../shared/data/objects``). On one scene at the defaults (30 % test points,
@@ -10,8 +10,9 @@ the neighbour cache, the placement tests first), with no top k (as ``benchmarks/
 ``detect_many`` over the one descriptor alone, then over all 8 (the one among them),
 alternating, ``--repeats`` times each. Checked: the one descriptor's detection is the same
 alone and among the 8 (decisions, accepted scores, heat map). Prints the seconds of the
-detection and of deciding (the placement tests and the scoring), and their ratios; writes
-``benchmarks/many_vs_one.json``.
+detection and of deciding (the placement tests and the scoring), and their ratios; with
+``--each`` also each of the 8 alone, once (the one pass against their sum: what sharing the
+test points and the scene index saves). Writes ``benchmarks/many_vs_one.json``.
 """
 
 from __future__ import annotations
@@ -37,6 +38,9 @@ def main() -> None:
     ap.add_argument("--fraction", type=float, default=0.3)
     ap.add_argument("--repeats", type=int, default=1)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--each", action="store_true",
+                    help="also each of the 8 alone, once: the sum of their times against the "
+                         "one pass (what the shared test points and scene index save)")
     ap.add_argument("--out", default=str(HERE / "many_vs_one.json"))
     args = ap.parse_args()
 
@@ -68,6 +72,13 @@ def main() -> None:
             kept[which] = dets[0 if which == "one" else one]
             print(f"{args.scene} {which}: {wall:.1f} s", flush=True)
             del dets
+    each = {}
+    if args.each:
+        for n, t in zip(names, tensors):
+            t0 = time.perf_counter()
+            it.detect_many(scene, [t], settings)
+            each[n] = time.perf_counter() - t0
+            print(f"{args.scene} {n} alone: {each[n]:.1f} s", flush=True)
     a, b = kept["one"], kept["eight"]
     acc = a.pairs.accepted
     same = bool(np.array_equal(acc, b.pairs.accepted)
@@ -78,11 +89,13 @@ def main() -> None:
            "machine": f"{platform.machine()}, {os.cpu_count()} cores, "
                       f"Python {platform.python_version()}",
            "command": f"python benchmarks/many_vs_one.py --scene {args.scene} --one {args.one}"
-                      f" --fraction {args.fraction} --repeats {args.repeats}",
+                      f" --fraction {args.fraction} --repeats {args.repeats}"
+                      + (" --each" if args.each else ""),
            "examples": names, "one": args.one, "points": len(scene), "median": med,
            "runs": runs, "same_detection_alone_and_among_8": same,
            "detect_ratio": med["eight"]["detect_s"] / med["one"]["detect_s"],
-           "deciding_ratio": med["eight"]["deciding_s"] / med["one"]["deciding_s"]}
+           "deciding_ratio": med["eight"]["deciding_s"] / med["one"]["deciding_s"],
+           "each_alone_s": each}
     Path(args.out).write_text(json.dumps(out, indent=1))
     print(f"\n{out['command']} ({out['date']}, {out['machine']})\n")
     print("| descriptors | candidates | detection s | deciding s (tests and scoring) |")
@@ -94,6 +107,11 @@ def main() -> None:
     print(f"\n8 descriptors: {out['detect_ratio']:.2f}x one's detection, "
           f"{out['deciding_ratio']:.2f}x its deciding; the one's detection the same alone and "
           f"among the 8: {same}")
+    if each:
+        total = sum(each.values())
+        print(f"each alone: {', '.join(f'{n} {v:.1f} s' for n, v in each.items())}; "
+              f"sum {total:.1f} s: the one pass takes {med['eight']['detect_s'] / total:.2f}x "
+              f"the sum, {med['eight']['detect_s'] / (total / len(each)):.2f}x the mean single")
 
 
 if __name__ == "__main__":
