@@ -63,10 +63,10 @@ def main() -> int:
         if reference is None:
             reference = preds
         identical = preds == reference
-        pairs = sum(r["pairs_scored"] for r in res.rows)
+        pairs = sum(r["pairs"] for r in res.rows)          # decided (tests and score)
         rows.append((n, seconds, len(res.rows), pairs, identical))
     one = next((s for n, s, *_ in rows if n == 1), None)
-    print("| workers | seconds | results per minute | scored pairs per second | "
+    print("| workers | seconds | results per minute | pairs decided per second | "
           "speed-up over 1 worker | identical predictions |")
     print("|---|---:|---:|---:|---:|---|")
     for n, s, k, pairs, same in rows:

@@ -62,6 +62,8 @@ def test_in_process_batch_writes_every_pair_and_resumes(data, tmp_path):
     assert [(r["scene"], r["descriptor"], r["status"]) for r in rows] == [
         ("room0", "bowl", "done"), ("room0", "loose", "done"),
         ("room1", "bowl", "done"), ("room1", "loose", "done")]
+    # pairs decided, and of them scored (those that passed the placement tests)
+    assert all(int(r["pairs"]) >= int(r["pairs_scored"]) > 0 for r in rows)
     page = (out / "index.html").read_text()
     assert page.count("render.png'><img") == 4 and "summary.csv" in page
     # a rerun skips everything; a removed result is made again, the others are left alone
@@ -72,6 +74,7 @@ def test_in_process_batch_writes_every_pair_and_resumes(data, tmp_path):
     again = batch(scenes, [data / "bowl.npz", data / "loose.npz"], out, workers=0,
                   sample_fraction=0.1, top_k=3)
     assert [r["status"] for r in again.rows] == ["skipped", "skipped", "skipped", "done"]
+    assert [r["pairs"] for r in again.rows] == [int(r["pairs"]) for r in rows]
     assert (out / "room0" / "bowl" / "predictions.json").stat().st_ino == kept
     assert (out / "room1" / "loose" / "predictions.json").is_file()
 

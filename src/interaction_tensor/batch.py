@@ -30,7 +30,7 @@ from .settings import DetectSettings
 
 #: columns of summary.csv
 COLUMNS = ["scene", "descriptor", "affordance", "status", "predictions", "best_score",
-           "pairs_scored", "pairs_accepted", "seconds", "output", "message"]
+           "pairs", "pairs_scored", "pairs_accepted", "seconds", "output", "message"]
 MARKER = "predictions.json"
 
 
@@ -164,7 +164,8 @@ def _row(job, name, det, folder, seconds) -> dict:
     return {"scene": job["scene_id"], "descriptor": name, "affordance": det.tensor.affordance,
             "status": "done", "predictions": len(det.predictions),
             "best_score": round(det.predictions[0].score, 6) if det.predictions else None,
-            "pairs_scored": st["pairs_scored"], "pairs_accepted": st["pairs_accepted"],
+            "pairs": st["pairs"], "pairs_scored": st["pairs_scored"],
+            "pairs_accepted": st["pairs_accepted"],
             "seconds": round(seconds, 3), "output": str(folder), "message": ""}
 
 
@@ -176,7 +177,7 @@ def _row_from_folder(job, name, folder, status) -> dict:
         return {"scene": job["scene_id"], "descriptor": name,
                 "affordance": doc.get("affordance"), "status": status,
                 "predictions": len(preds), "best_score": preds[0]["score"] if preds else None,
-                "pairs_scored": st.get("pairs_scored"),
+                "pairs": st.get("pairs"), "pairs_scored": st.get("pairs_scored"),
                 "pairs_accepted": st.get("pairs_accepted"),
                 "seconds": st.get("seconds", {}).get("total"), "output": str(folder),
                 "message": "done by an earlier run"}
@@ -186,7 +187,8 @@ def _row_from_folder(job, name, folder, status) -> dict:
 
 def _failed(job, name, message) -> dict:
     return {"scene": job["scene_id"], "descriptor": name, "affordance": None,
-            "status": "failed", "predictions": 0, "best_score": None, "pairs_scored": None,
+            "status": "failed", "predictions": 0, "best_score": None, "pairs": None,
+            "pairs_scored": None,
             "pairs_accepted": None, "seconds": None, "output": "", "message": message}
 
 
