@@ -6,7 +6,7 @@
 Builds the examples' descriptors (1 cm), then runs ``itensor batch`` (no pictures) over the
 published scenes once per worker count into a fresh directory, and checks that every run wrote
 identical predictions (same scores and positions). Prints a Markdown table: workers, seconds,
-(scene, descriptor) pairs per minute, scored (point, orientation) pairs per second, speed-up
+(scene, descriptor) pairs per minute, (point, orientation) pairs decided per second, speed-up
 over 1 worker. Needs ../shared/data and ``pip install "interaction-tensor[dask]"``.
 """
 
