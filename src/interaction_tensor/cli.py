@@ -258,8 +258,8 @@ def _report(args, result, outdir) -> None:
                f"{f' (of them {done:.2f} s completing the placed pairs)' if done else ''} "
                f"({st['backend']}{' on ' + st['device'] if st['backend'] == 'torch' else ''})"
                f"{'' if first else f', placement tests in {tests_s:.2f} s'}; "
-               f"{st['mean_comparisons_per_decision']:.0f} keypoint comparisons per "
-               f"{'scored pair' if first else 'decision'}")
+               f"{st['mean_comparisons_per_decision']:.0f} keypoint comparisons to a "
+               f"{'scored pair' if first else 'pair'}'s decision")
     of_what = (f"{st['pairs_scored']} that passed the placement tests" if first else
                f"{st['pairs_accepted_by_score']} the score accepted")
     _say(args, f"accepted {st['pairs_accepted']} of the {of_what} (placement tests failed: "
