@@ -197,7 +197,7 @@ def test_completing_only_the_placed_pairs_changes_only_the_work(bowl, threshold)
 
 
 @pytest.mark.parametrize("threshold", [0.3, 0.6])
-def test_testing_first_changes_only_the_work(bowl, threshold):
+def test_testing_first_changes_only_the_work(bowl, threshold, monkeypatch):
     """stage_order 'tests-first' (the default) gives every pair the placement tests and
     scores only those that pass: the same final decisions, accepted scores bit for bit,
     heat map, predictions and rankings as score-first with every accepted pair completed;
@@ -243,6 +243,25 @@ def test_testing_first_changes_only_the_work(bowl, threshold):
         want = rank_pairs(a, 5, 0.15, worst=worst, block=64)
         for g, w in zip(got, want):
             np.testing.assert_array_equal(g, w)
+    # in another keypoint order too (the adaptive one's pilot made to choose the reverse of
+    # the weight order): the rankings' bounds follow the order the pairs were scored in
+    import sys
+
+    monkeypatch.setattr(sys.modules["interaction_tensor.detect"], "pilot_order",
+                        lambda table, *a, **k: np.arange(table.n)[::-1].copy())
+    # (the gaussian criterion, whose keypoints' largest terms differ, so that the bounds
+    # depend on the order)
+    def gaussian(**kw):
+        return it.detect(room, bowl, it.DetectSettings(sample_fraction=0.03, threshold=0.6,
+                                                       criterion="gaussian", **kw))
+    ad = gaussian(keypoint_order="adaptive")
+    ref = gaussian(complete_scores="accepted", stage_order="score-first")
+    np.testing.assert_array_equal(ad.pairs.accepted, ref.pairs.accepted)
+    scored = np.flatnonzero(ad.scored & ~ad.pairs.accepted)
+    assert len(scored) > 10
+    full = full_scores(ad, scored)[0]
+    bound = ad.pairs.score[scored] + ad.rest[ad.pairs.decided_at[scored]]
+    assert (full <= bound + 1e-12).all() and (full >= ad.pairs.score[scored] - 1e-12).all()
 
 
 def test_tests_first_cannot_complete_every_accepted_pair():

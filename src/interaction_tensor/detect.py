@@ -786,6 +786,8 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
                  for pairs, (viol, outcome) in zip(scores, tested)]
         complete = [pairs.accepted.copy() if settings.early_exit else m.copy()
                     for pairs, m in zip(scores, scored)]
+        for full, sub in zip(full_jobs, jobs):
+            full.table = sub.table                # the keypoint order the scores used
         jobs = full_jobs
     else:
         t3 = time.perf_counter()
