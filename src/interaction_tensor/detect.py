@@ -547,37 +547,31 @@ def check_clearance(scene, tensor, settings: DetectSettings, pair_point, pair_or
     pairs the score accepted (in place on ``pairs.accepted``). Returns (score_accepted (P,)
     bool, clearance violations (P,) int, -1 where not tested, outcome (P,) int8: -1 where
     not tested, else :data:`.clearance.PLACED` or the first test failed)."""
-    from .clearance import UNTESTED, PLACED, check_placements
+    from .clearance import PLACED
 
     score_acc = pairs.accepted.copy()
-    k = len(tensor.clearance_points)
-    viol = np.full(len(pairs.accepted), -1, np.int16 if k < 2 ** 15 else np.int32)
-    outcome = np.full(len(pairs.accepted), UNTESTED, np.int8)
     idx = np.flatnonzero(score_acc)
-    for s in range(0, len(idx), 262_144):          # bounds the gathered positions
-        sl = idx[s:s + 262_144]
-        v, outcome[sl] = check_placements(scene.points[pair_point[sl]],
-                                          np.asarray(pair_orient[sl], np.int64), tensor,
-                                          settings, scene, grid)
-        if settings.clearance and k:
-            viol[sl] = v
+    viol, outcome = test_all(scene, tensor, settings, pair_point, pair_orient, grid, idx)
     pairs.accepted[idx[outcome[idx] != PLACED]] = False
     return score_acc, viol, outcome
 
 
-def test_all(scene, tensor, settings: DetectSettings, pair_point, pair_orient, grid=None):
-    """The placement tests (:func:`.clearance.check_placements`) of every pair, before any
-    score (``DetectSettings.stage_order`` ``tests-first``). Returns (clearance violations
-    (P,) int, -1 where the clearance test is off; outcome (P,) int8:
-    :data:`.clearance.PLACED` or the first test failed)."""
-    from .clearance import check_placements
+def test_all(scene, tensor, settings: DetectSettings, pair_point, pair_orient, grid=None,
+             idx=None):
+    """The placement tests (:func:`.clearance.check_placements`) of pairs ``idx`` (default:
+    every pair, before any score: ``DetectSettings.stage_order`` ``tests-first``). Returns
+    (clearance violations (P,) int, -1 where not tested or the clearance test is off;
+    outcome (P,) int8: -1 where not tested, else :data:`.clearance.PLACED` or the first
+    test failed)."""
+    from .clearance import UNTESTED, check_placements
 
     k = len(tensor.clearance_points)
     n = len(pair_point)
     viol = np.full(n, -1, np.int16 if k < 2 ** 15 else np.int32)
-    outcome = np.empty(n, np.int8)
-    for s in range(0, n, 262_144):                  # bounds the gathered positions
-        sl = slice(s, s + 262_144)
+    outcome = np.full(n, UNTESTED, np.int8)
+    step = 262_144                                  # bounds the gathered positions
+    for s in range(0, n if idx is None else len(idx), step):
+        sl = slice(s, s + step) if idx is None else idx[s:s + step]
         v, outcome[sl] = check_placements(scene.points[pair_point[sl]],
                                           np.asarray(pair_orient[sl], np.int64), tensor,
                                           settings, scene, grid)
