@@ -28,8 +28,9 @@ from pathlib import Path
 
 import numpy as np
 
+from _protocol import protocol_descriptors, published_scene
+
 HERE = Path(__file__).resolve().parent
-DATA = Path(os.environ.get("ITENSOR_SHARED_DATA", HERE.parent.parent / "shared" / "data"))
 MODES = ("accepted", "placed")
 
 
@@ -82,24 +83,20 @@ def main() -> None:
     args = ap.parse_args()
 
     import interaction_tensor as it
-    from interaction_tensor.examples import interactions
 
-    names = args.examples or interactions.names()
-    tensors = [interactions.build_descriptor(n, seed=args.seed, spacing=0.01,
-                                             example=interactions.build(n, DATA / "objects",
-                                                                        args.seed))
-               for n in names]
+    names, tensors = protocol_descriptors(args.examples, args.seed)
     rows = []
     for scene_name in args.scenes:
-        scene = it.prepare_scene(it.load_geometry(DATA / "scenes" / f"{scene_name}.ply"), 0.01,
-                                 seed=args.seed)
+        scene = published_scene(scene_name, args.seed)
         it.detect_many(scene, tensors, it.DetectSettings(sample_fraction=0.0005, top_k=0))
         runs = {m: [] for m in MODES}
         dets = {}
         for r in range(args.repeats):
             for m in (MODES if r % 2 == 0 else MODES[::-1]):
+                # both score first (the order this benchmark compares completions in;
+                # the default since 2026-11-27 tests first: benchmarks/stage_order.py)
                 st = it.DetectSettings(sample_fraction=args.fraction, seed=args.seed, top_k=5,
-                                       complete_scores=m)
+                                       complete_scores=m, stage_order="score-first")
                 t = time.perf_counter()
                 dets[m] = it.detect_many(scene, tensors, st)
                 wall = time.perf_counter() - t

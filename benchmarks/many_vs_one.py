@@ -27,8 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
+from _protocol import protocol_descriptors, published_scene
+
 HERE = Path(__file__).resolve().parent
-DATA = Path(os.environ.get("ITENSOR_SHARED_DATA", HERE.parent.parent / "shared" / "data"))
 
 
 def main() -> None:
@@ -45,16 +46,10 @@ def main() -> None:
     args = ap.parse_args()
 
     import interaction_tensor as it
-    from interaction_tensor.examples import interactions
 
-    names = interactions.names()
-    tensors = [interactions.build_descriptor(n, seed=args.seed, spacing=0.01,
-                                             example=interactions.build(n, DATA / "objects",
-                                                                        args.seed))
-               for n in names]
+    names, tensors = protocol_descriptors(seed=args.seed)
     one = names.index(args.one)
-    scene = it.prepare_scene(it.load_geometry(DATA / "scenes" / f"{args.scene}.ply"), 0.01,
-                             seed=args.seed)
+    scene = published_scene(args.scene, args.seed)
     it.detect_many(scene, tensors, it.DetectSettings(sample_fraction=0.0005, top_k=0))
     settings = it.DetectSettings(sample_fraction=args.fraction, top_k=0, seed=args.seed)
     runs = {"one": [], "eight": []}

@@ -38,8 +38,9 @@ from pathlib import Path
 
 import numpy as np
 
+from _protocol import protocol_descriptors, published_scene
+
 HERE = Path(__file__).resolve().parent
-DATA = Path(os.environ.get("ITENSOR_SHARED_DATA", HERE.parent.parent / "shared" / "data"))
 CONFIGS = ("reference", "before", "score-first", "tests-first")
 SETTINGS = {"reference": {"complete_scores": "accepted", "stage_order": "score-first"},
             "before": {"stage_order": "score-first"},
@@ -93,17 +94,11 @@ def main() -> None:
                                if c in CONFIGS and c != "reference"]
 
     import interaction_tensor as it
-    from interaction_tensor.examples import interactions
 
-    names = args.examples or interactions.names()
-    tensors = [interactions.build_descriptor(n, seed=args.seed, spacing=0.01,
-                                             example=interactions.build(n, DATA / "objects",
-                                                                        args.seed))
-               for n in names]
+    names, tensors = protocol_descriptors(args.examples, args.seed)
     rows = []
     for scene_name in args.scenes:
-        scene = it.prepare_scene(it.load_geometry(DATA / "scenes" / f"{scene_name}.ply"), 0.01,
-                                 seed=args.seed)
+        scene = published_scene(scene_name, args.seed)
         for c in configs:                                   # compile every kernel first
             with nearest_contacts(c == "before", scene):
                 it.detect_many(scene, tensors, it.DetectSettings(sample_fraction=0.0005,
