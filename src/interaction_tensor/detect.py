@@ -956,6 +956,11 @@ def rank_pairs(det: Detection, k: int, radius: float, worst: bool = False, block
     the rejected pairs scored, which are those of the highest bounds and, among equal
     bounds, of the highest partial scores).
 
+    With ``DetectSettings.stage_order`` tests-first the pairs that failed a test were never
+    scored, so a ranking that reaches into them scores more of them again, and past
+    ``max_evaluations`` keeps other pairs than after score-first with every accepted pair
+    completed (``complete_scores='accepted'``, what ``itensor evaluate`` asks for).
+
     Returns (indices into the pair arrays (<= k,), full scores, clearance_ok), best first
     (worst first when ``worst``).
     """

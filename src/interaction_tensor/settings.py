@@ -192,7 +192,8 @@ class DetectSettings:
     #: and the running sum are those of ``score-first``, so the decisions, the accepted
     #: scores (bit for bit), the heat map and the predictions are the same; a pair that fails
     #: a test is never scored (score 0, ``Detection.scored`` False) and its placement outcome
-    #: is known whatever its score. ``score-first``: every pair is scored to its decision and
+    #: is known whatever its score; a ranking of such pairs (``detect.rank_pairs``) scores
+    #: them again, at most 50,000, so past that it can differ from score-first's. ``score-first``: every pair is scored to its decision and
     #: the tests run on the pairs the score accepts (the only order before 2026-11-27).
     #: ``auto`` (default): ``tests-first``, unless ``complete_scores`` is ``accepted`` or
     #: ``early_exit`` is off, which ask for the scores of pairs whatever their tests. With
