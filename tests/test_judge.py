@@ -220,7 +220,7 @@ def test_separation_in_a_slot_tries_the_short_moves_before_the_limit():
 
 
 def test_a_board_edge_over_a_mug_in_a_niche_is_not_a_tap():
-    """A mug in a niche (a board under it, panels on three sides) with a board's front edge
+    """A mug in a niche (a board under it, panels on three sides, a front lip) with a board's front edge
     2.5 cm behind its axis and 13 cm over its rim passes the basin test and has scene surface
     within 3 cm of its axis, covering less than half the disk: the judge without its
     one-side test took it for a tap (as office-desk2's keyboard niche). The edge spans about
@@ -232,12 +232,15 @@ def test_a_board_edge_over_a_mug_in_a_niche_is_not_a_tap():
     niche = [box_part("floor board", (ox, oy, bottom - 0.01), (0.4, 0.5, 0.02)),
              box_part("left panel", (ox - 0.21, oy, bottom + 0.11), (0.02, 0.5, 0.24)),
              box_part("right panel", (ox + 0.21, oy, bottom + 0.11), (0.02, 0.5, 0.24)),
-             box_part("back panel", (ox, oy + 0.26, bottom + 0.11), (0.44, 0.02, 0.24))]
+             box_part("back panel", (ox, oy + 0.26, bottom + 0.11), (0.44, 0.02, 0.24)),
+             # a front lip 15 cm high: the niche's floor is a basin (the sink test passes)
+             box_part("front lip", (ox, oy - 0.26, bottom + 0.075), (0.44, 0.02, 0.15))]
     rim = float(ex.query.vertices[:, 2].max())
     board = box_part("top board", (ox, oy + 0.025 + 0.1125, rim + 0.14), (0.4, 0.225, 0.02))
     scene = JudgeScene(parts_mesh(niche + [board]))
     v = judge.judge(scene, np.eye(4))
     assert v.basin >= 5 and v.support_margin > 0.01            # only the tap test decides
+    assert judge._sink(scene, judge.opening, bottom) >= judge.settings.sink_sectors
     assert not v.valid and v.overhead is False
     before = Judge.for_example(ex, JudgeSettings(overhead_one_side=False,
                                                  overhead_max_angle=360.0))
@@ -245,3 +248,44 @@ def test_a_board_edge_over_a_mug_in_a_niche_is_not_a_tap():
     spout = box_part("spout", (ox, oy + 0.025 + 0.1125, rim + 0.14), (0.03, 0.225, 0.02))
     v = judge.judge(JudgeScene(parts_mesh(niche + [spout])), np.eye(4))
     assert v.overhead is True and v.valid, v.reasons
+
+
+def test_a_tap_with_no_sink_under_it_is_not_a_filling_place():
+    """The sink test: the same spout over a mug on an open board (no walls), over a mug in a
+    box-like basin (valid), and over a mug on the divider of a double sink (the basins
+    beside it): the sink test fails on the open board alone. Where the sink is open above
+    but walled by a frame standing on the support (office-desk6's wire rack), or the bottom
+    is a shelf under a counter, see labelled.HAND_POSED and the docstring of judge.py."""
+    ex = interactions.build("filling-mug")
+    judge = Judge.for_example(ex)
+    ox, oy, bottom = ex.support_point
+    rim = float(ex.query.vertices[:, 2].max())
+    spout = [box_part("column", (ox, oy + 0.22, (bottom + rim + 0.16) / 2),
+                      (0.03, 0.03, rim + 0.16 - bottom)),
+             box_part("spout", (ox, oy + 0.1, rim + 0.14), (0.03, 0.25, 0.02))]
+    board = [box_part("board", (ox, oy, bottom - 0.01), (0.6, 0.6, 0.02))]
+    scene = JudgeScene(parts_mesh(board + spout))
+    v = judge.judge(scene, np.eye(4))
+    assert v.overhead and not v.valid
+    # (the sink test, the costliest, is asked only of a pose that passes the others)
+    assert v.sink is None and judge._sink(scene, judge.opening, bottom) < \
+        judge.settings.sink_sectors
+    walls = [box_part(n, c, sz) for n, c, sz in (
+        ("left", (ox - 0.2, oy, bottom + 0.08), (0.02, 0.42, 0.16)),
+        ("right", (ox + 0.2, oy, bottom + 0.08), (0.02, 0.42, 0.16)),
+        ("back", (ox, oy + 0.2, bottom + 0.08), (0.42, 0.02, 0.16)),
+        ("front", (ox, oy - 0.2, bottom + 0.08), (0.42, 0.02, 0.16)))]
+    v = judge.judge(JudgeScene(parts_mesh(board + walls + spout)), np.eye(4))
+    assert v.valid, v.reasons
+    assert v.sink >= judge.settings.sink_sectors
+    # a divider 6 cm wide between two basins 16 cm deep, the mug on it under the spout
+    top = bottom
+    parts = [box_part("divider", (ox, oy, top - 0.08), (0.06, 0.42, 0.16))]
+    for s in (-1, 1):
+        cx = ox + s * 0.18
+        parts += [box_part(f"basin bottom {s}", (cx, oy, top - 0.17), (0.30, 0.42, 0.02)),
+                  box_part(f"outer wall {s}", (ox + s * 0.34, oy, top - 0.08), (0.02, 0.42, 0.18)),
+                  box_part(f"back wall {s}", (cx, oy + 0.22, top - 0.08), (0.30, 0.02, 0.18)),
+                  box_part(f"front wall {s}", (cx, oy - 0.22, top - 0.08), (0.30, 0.02, 0.18))]
+    assert judge._sink(JudgeScene(parts_mesh(parts + spout)), judge.opening, bottom) >= \
+        judge.settings.sink_sectors

@@ -52,8 +52,9 @@ def test_the_set_has_20_valid_and_20_invalid_poses_per_affordance(poses):
 def test_the_bar_traps_fail_the_basin_test_and_the_one_side_tap_test(poses):
     """The mugs under a bar pass every filling test but the basin's when the tap test only
     asks for surface over the opening (what fooled the judge before it had a basin test);
-    the bar runs across the opening, so the tap test's one-side rule rejects them as well:
-    each test alone would."""
+    the bar runs across the opening, so the tap test's one-side rule rejects them as well,
+    and no sink is under them: each test alone would (the lenient judge here has no sink
+    test, so that the basin's is seen alone)."""
     from interaction_tensor.evaluation.judge import Judge, JudgeScene, JudgeSettings
     from interaction_tensor.examples import interactions, validation
 
@@ -62,7 +63,8 @@ def test_the_bar_traps_fail_the_basin_test_and_the_one_side_tap_test(poses):
     example = interactions.build("filling-mug", _objects())
     judge = Judge.for_example(example)
     lenient = Judge.for_example(example, JudgeSettings(overhead_one_side=False,
-                                                       overhead_max_angle=360.0))
+                                                       overhead_max_angle=360.0,
+                                                       sink_sectors=0))     # no sink test
     scene = JudgeScene(validation.build_scene("judge_traps").geometry)
     for p in traps:
         v = lenient.judge(scene, np.asarray(p.pose))
@@ -70,6 +72,10 @@ def test_the_bar_traps_fail_the_basin_test_and_the_one_side_tap_test(poses):
         assert len(v.reasons) == 1 and v.reasons[0].startswith("not in a basin"), v.reasons
         v = judge.judge(scene, np.asarray(p.pose))
         assert v.overhead is False and v.basin < judge.settings.basin_sectors
+        opening = np.asarray(p.pose)[:3, :3] @ judge.opening + np.asarray(p.pose)[:3, 3]
+        support = (np.asarray(p.pose)[:3, :3] @ example.support_point
+                   + np.asarray(p.pose)[:3, 3])[2]
+        assert judge._sink(scene, opening, support) < judge.settings.sink_sectors   # no sink
     assert "judge_traps" not in validation.scene_names()        # never tuned on
 
 

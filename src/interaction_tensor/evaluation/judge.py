@@ -46,10 +46,24 @@ Tests, by affordance (``tests`` in :data:`TESTS`):
    the labelled taps span 0-100). A bar, a board's front edge or a monitor's bezel runs
    across or along the opening (220-280 degrees): office-desk2's keyboard niche and
    office-desk4's monitor fooled the judge without it; and walls around
-   the object, as a sink's, a washbasin's or a dispenser niche's: scene surface between the
+   the object, as a sink's or a washbasin's: scene surface between the
    object's side and 30 cm from its axis, from 2 cm above its support up to its rim, in at
    least 5 of 8 sectors around it (a mug on the floor under a table's stretcher, or on a
-   counter under a towel bar, has walls on a few sides at most).
+   counter under a towel bar, has walls on a few sides at most); and **a sink**, where the
+   water goes: within ``sink_radius`` = 15 cm of the opening's axis, an up-facing scene
+   surface (a basin's bottom) no higher than 2 cm above the object's support and at most
+   ``sink_depth`` = 45 cm below it, open above up to the opening (not a shelf inside a
+   cabinet, not the floor under a seat) and closed all around: in at least ``sink_sectors`` =
+   33 of 36 directions (10 degrees each) around it, within ``sink_reach`` = 35 cm, wall
+   surface (not a board: its normal at least 37 degrees from vertical) both 2-6 and 8-14 cm
+   above it: walls that rise from the bottom (a bucket seat's rim is lower; a wire rack's
+   frame standing on a desk has only its legs near the desk); the costliest test, asked only
+   of a pose that passes the others. The object may stand on that bottom or beside it (on
+   a double sink's divider, under its tap; a water dispenser's niche with no tray is not a
+   sink). The exhaustive search of every standing mug in the published
+   scenes (``evaluation/oracle.py``, 2026-11-27) found tap and basin tests passed by a mug
+   beside a potted plant under its leaves (kitchen1), on a desk under a wire rack's foot
+   and on chair seats under a desk's edge (office-desk6): none has a sink.
 5. **Through the loop** (hanging). The hook's (the strap's) inner disk must be crossed by the
    scene: the rail, peg, door top or panel edge passes through the loop, so the object hangs
    from it. A hanger standing on a flat top or beside an edge fails. So does one flat
@@ -118,7 +132,7 @@ from .. import collision
 #: The tests of each affordance (module docstring).
 TESTS = {
     "placing": ("upright", "penetration", "contact", "support"),
-    "filling": ("upright", "penetration", "contact", "support", "overhead", "basin"),
+    "filling": ("upright", "penetration", "contact", "support", "overhead", "basin", "sink"),
     "hanging": ("upright", "penetration", "contact", "loop", "ground"),
     "sitting": ("upright", "penetration", "contact", "support", "feet"),
     "riding": ("upright", "penetration", "contact", "astride", "legroom", "mount"),
@@ -161,6 +175,12 @@ class JudgeSettings:
     basin_radius: float = 0.30
     basin_height: tuple = (0.02, 0.0)          # above the support, above the rim
     basin_sectors: int = 5                     # of 8
+    sink_radius: float = 0.15
+    sink_depth: float = 0.45
+    sink_foot: tuple = (0.02, 0.06)            # above the basin's bottom: walls low
+    sink_wall: tuple = (0.08, 0.14)            # and high
+    sink_reach: float = 0.35
+    sink_sectors: int = 33                     # of 36 (10 degrees each)
     loop_fraction: float = 0.85
     loop_min_angle: float = 30.0
     below_ground: float = 0.01
@@ -195,6 +215,7 @@ class Verdict:
     support_margin: float | None = None
     overhead: bool | None = None
     basin: int | None = None
+    sink: int | None = None
     loop: bool | None = None
     feet_gap: float | None = None
     below_ground: float | None = None
@@ -209,7 +230,8 @@ class Verdict:
             return None if v is None else (None if not np.isfinite(v) else round(float(v), nd))
         return {"valid": bool(self.valid), "penetration_m": r(self.penetration),
                 "contact": r(self.contact, 3), "support_margin_m": r(self.support_margin),
-                "overhead": self.overhead, "basin_sectors": self.basin, "loop": self.loop,
+                "overhead": self.overhead, "basin_sectors": self.basin, "sink_sectors": self.sink,
+                "loop": self.loop,
                 "feet_gap_m": r(self.feet_gap), "below_ground_m": r(self.below_ground),
                 "astride": self.astride, "legroom": self.legroom,
                 "seat_height_m": r(self.seat_height), "tilt_deg": r(self.tilt, 2),
@@ -440,6 +462,12 @@ class Judge:
                                         moved(self.opening)[2])
             if verdict.basin < st.basin_sectors:
                 reasons.append(f"not in a basin (walls on {verdict.basin} of 8 sides)")
+        if "sink" in self.tests and not reasons:    # the costliest test (10-20 ms): asked
+            # only of a pose that passes the others (Verdict.sink stays None otherwise)
+            verdict.sink = self._sink(scene, moved(self.opening), moved(self.support_point)[2])
+            if verdict.sink < st.sink_sectors:
+                reasons.append(f"no sink under it (a bottom closed in at most {verdict.sink} "
+                               "of 36 directions)")
         if "loop" in self.tests:
             verdict.loop = (scene.collider.collides(self.loop_body, pose)
                             and self._loop_crossed(scene, rot, t))
@@ -539,6 +567,77 @@ class Judge:
             (r <= st.basin_radius)
         sector = np.floor((np.arctan2(d[wall, 1], d[wall, 0]) + np.pi) / (np.pi / 4))
         return int(len(np.unique(np.clip(sector, 0, 7))))
+
+    def _sink(self, scene: JudgeScene, opening, support_z: float, cell: float = 0.03) -> int:
+        """The most sectors (of 36) closed around a basin bottom near the opening: up-facing
+        samples within ``sink_radius`` of its axis, from ``sink_depth`` below the support to
+        2 cm above it (one per ``cell`` in plan), open above up to the opening (no sample
+        within ``cell`` over them, 2 cm or more higher), each with wall surface (normal at
+        least 37 degrees from vertical) both ``sink_foot`` and ``sink_wall`` above it within
+        ``sink_reach`` in how many of 36 sectors around it."""
+        st = self.settings
+        lo, hi = support_z - st.sink_depth, support_z + 0.02
+        c = np.asarray(opening, float)
+        ball = np.asarray(scene.tree.query_ball_point(
+            [c[0], c[1], (lo + hi) / 2], float(np.hypot(st.sink_radius, (hi - lo) / 2))),
+            np.int64)
+        p, n = scene.points[ball], scene.normals[ball]
+        bottom = ((p[:, 2] >= lo) & (p[:, 2] <= hi) & (np.abs(n[:, 2]) >= np.cos(np.radians(25)))
+                  & (np.hypot(p[:, 0] - c[0], p[:, 1] - c[1]) <= st.sink_radius))
+        b = p[bottom]
+        if not len(b):
+            return 0
+        _, first = np.unique(np.floor(b / cell).astype(np.int64), axis=0, return_index=True)
+        b = b[np.sort(first)]
+        # a bottom water can reach: nothing over it (2 cm up to the opening, within a cell):
+        # not a shelf in a cabinet under the counter, not the floor under a seat
+        top = float(c[2])
+        ball = np.asarray(scene.tree.query_ball_point(
+            [c[0], c[1], (lo + top) / 2],
+            float(np.hypot(st.sink_radius + cell, (top - lo) / 2))), np.int64)
+        a = scene.points[ball]
+        a = a[a[:, 2] <= top]
+        open_above = np.ones(len(b), bool)
+        for s in range(0, len(b), 64):
+            bb = b[s:s + 64]
+            dx = a[None, :, 0] - bb[:, None, 0]
+            dy = a[None, :, 1] - bb[:, None, 1]
+            over = (dx * dx + dy * dy <= cell ** 2) & (a[None, :, 2] - bb[:, None, 2] > 0.02)
+            open_above[s:s + 64] = ~over.any(axis=1)
+        b = b[open_above]
+        if not len(b):
+            return 0
+        wlo, whi = b[:, 2].min() + st.sink_foot[0], b[:, 2].max() + st.sink_wall[1]
+        reach = st.sink_radius + st.sink_reach
+        ball = np.asarray(scene.tree.query_ball_point(
+            [c[0], c[1], (wlo + whi) / 2], float(np.hypot(reach, (whi - wlo) / 2))), np.int64)
+        w, wn = scene.points[ball], scene.normals[ball]
+        w = w[(w[:, 2] >= wlo) & (w[:, 2] <= whi) & (np.abs(wn[:, 2]) <= 0.8)]   # walls
+        best = 0
+        for s in range(0, len(b), 32):
+            bb = b[s:s + 32]
+            dx = w[None, :, 0] - bb[:, None, 0]
+            dy = w[None, :, 1] - bb[:, None, 1]
+            h = w[None, :, 2] - bb[:, None, 2]
+            near = dx * dx + dy * dy <= st.sink_reach ** 2
+            sector = np.clip(np.floor((np.arctan2(dy, dx) + np.pi) / (np.pi / 18)),
+                             0, 35).astype(np.int64)
+            # a basin's walls rise from its bottom: wall surface low (its foot) and high
+            for lo_h, hi_h in (st.sink_foot, st.sink_wall):
+                band = near & (h >= lo_h) & (h <= hi_h)
+                if lo_h == st.sink_foot[0]:
+                    closed = np.zeros((len(bb), 36), bool)
+                    rows, cols = np.nonzero(band)
+                    closed[rows, sector[rows, cols]] = True
+                else:
+                    high = np.zeros((len(bb), 36), bool)
+                    rows, cols = np.nonzero(band)
+                    high[rows, sector[rows, cols]] = True
+                    closed &= high
+            best = max(best, int(closed.sum(axis=1).max()))
+            if best == 36:
+                return best
+        return best
 
     def _feet_gap(self, scene: JudgeScene, feet: list, com) -> tuple:
         """Largest distance (m) from a sole down to the highest scene surface under it that one

@@ -550,6 +550,26 @@ HAND_POSED: list = [
      "in a niche under a board's edge, no tap", "office-desk2 keyboard niche"),
     ("filling", "scenes/office-desk4.ply", (1.316, 0.234, 0.738), math.pi / 2, False,
      "beside a monitor's stand under its bezel, no tap", "office-desk4 desk"),
+    # found by the exhaustive search of every standing mug (evaluation/oracle.py,
+    # 2026-11-27), which the judge of that day passed; drawn from four sides and labelled by
+    # eye after the judge had seen them: a mug on a double sink's divider under the tap (a
+    # place a person fills a mug at), and, with no tap or no sink, a mug beside a potted
+    # plant under its leaves, on a desk under a wire rack's foot (the rack's frame walls it
+    # in above the desk) and on chair seats under a desk's edge
+    ("filling", "scenes/kitchen1.ply", (7.098, 10.115, 0.884), 0.0, True,
+     "on a double sink's divider under the tap", "kitchen1 sink"),
+    ("filling", "scenes/kitchen1.ply", (7.094, 10.126, 0.884), math.pi / 2, True,
+     "on a double sink's divider under the tap", "kitchen1 sink"),
+    ("filling", "scenes/kitchen1.ply", (6.6, 10.395, 0.916), 0.0, False,
+     "beside a potted plant under its leaves, no tap", "kitchen1 counter"),
+    ("filling", "scenes/office-desk6.ply", (0.129, 0.258, 0.769), 5 * math.pi / 4, False,
+     "under a wire rack's foot, no tap, no sink", "office-desk6 desk"),
+    ("filling", "scenes/office-desk6.ply", (0.347, 0.313, 0.769), 0.0, False,
+     "under a wire rack's foot, no tap, no sink", "office-desk6 desk"),
+    ("filling", "scenes/office-desk6.ply", (0.944, -1.098, 0.443), 0.0, False,
+     "on a chair seat under a desk's edge, no tap, no sink", "office-desk6 chair"),
+    ("filling", "scenes/office-desk6.ply", (0.94, 1.143, 0.444), 0.0, False,
+     "on a chair seat under a desk's edge, no tap, no sink", "office-desk6 chair"),
 ]
 
 

@@ -1,0 +1,61 @@
+"""Diagnosis (not tuning): does a box of a published scene hold any valid pose of an example?
+
+Judges the example descriptor's own poses (``InteractionTensor.pose``: the family detection
+proposes) at every judge sample in the box whose normal line is within 15 degrees of the
+descriptor's N_aff, in ``--orientations`` orientations (8 is detection's; more to see whether
+the 45-degree steps alone miss a place), optionally one sample per ``--cell`` m in plan
+(:func:`interaction_tensor.evaluation.oracle.region_poses`). Used for the seats a method found
+no valid sitter on (a chair pushed under a table); prints one Markdown row per box.
+
+    python scripts/region_oracle.py --objects ../shared/data/objects --example sitting-human \\
+        --scene ../shared/data/scenes/office-desk1.ply --box 0.1,-0.26,0.37 0.55,0.25,0.48
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from interaction_tensor.evaluation.judge import Judge, JudgeScene
+from interaction_tensor.evaluation.oracle import region_poses
+from interaction_tensor.examples import interactions
+from interaction_tensor.io import load_geometry
+
+
+def _xyz(text: str) -> tuple:
+    v = tuple(float(x) for x in text.split(","))
+    if len(v) != 3:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected x,y,z")
+    return v
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--objects", required=True)
+    ap.add_argument("--example", required=True)
+    ap.add_argument("--scene", required=True)
+    ap.add_argument("--box", nargs=2, type=_xyz, required=True, metavar="X,Y,Z",
+                    help="lower and upper corners (m)")
+    ap.add_argument("--orientations", type=int, default=8)
+    ap.add_argument("--cell", type=float, default=None, help="one sample per cell (m)")
+    args = ap.parse_args(argv)
+    ex = interactions.build(args.example, args.objects)
+    tensor = interactions.build_descriptor(args.example, args.objects, example=ex)
+    js = JudgeScene(load_geometry(args.scene))
+    t0 = time.perf_counter()
+    res = region_poses(js, Judge.for_example(ex), tensor, args.box[0], args.box[1],
+                       args.orientations, args.cell)
+    why = ", ".join(f"{r} {c}" for r, c in res.reasons.most_common(4))
+    print("| scene | example | box (m) | samples | orientations | poses | valid | reasons | s |")
+    print("|---|---|---|---:|---:|---:|---:|---|---:|")
+    print(f"| {Path(args.scene).stem} | {args.example} | {args.box[0]} - {args.box[1]} | "
+          f"{res.samples:,} | {args.orientations} | {res.poses:,} | {len(res.valid)} | {why} | "
+          f"{time.perf_counter() - t0:.0f} |")
+    for i, k in res.valid[:20]:
+        print(f"valid: {res.points[i].round(3).tolist()} orientation {k}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
