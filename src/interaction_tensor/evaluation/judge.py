@@ -622,18 +622,14 @@ class Judge:
             near = dx * dx + dy * dy <= st.sink_reach ** 2
             sector = np.clip(np.floor((np.arctan2(dy, dx) + np.pi) / (np.pi / 18)),
                              0, 35).astype(np.int64)
-            # a basin's walls rise from its bottom: wall surface low (its foot) and high
+            # a basin's walls rise from its bottom: wall surface low (its foot) and high, in
+            # the same direction
+            closed = np.ones((len(bb), 36), bool)
             for lo_h, hi_h in (st.sink_foot, st.sink_wall):
-                band = near & (h >= lo_h) & (h <= hi_h)
-                if lo_h == st.sink_foot[0]:
-                    closed = np.zeros((len(bb), 36), bool)
-                    rows, cols = np.nonzero(band)
-                    closed[rows, sector[rows, cols]] = True
-                else:
-                    high = np.zeros((len(bb), 36), bool)
-                    rows, cols = np.nonzero(band)
-                    high[rows, sector[rows, cols]] = True
-                    closed &= high
+                rows, cols = np.nonzero(near & (h >= lo_h) & (h <= hi_h))
+                seen = np.zeros((len(bb), 36), bool)
+                seen[rows, sector[rows, cols]] = True
+                closed &= seen
             best = max(best, int(closed.sum(axis=1).max()))
             if best == 36:
                 return best
