@@ -487,103 +487,10 @@ def numba_threads() -> int:
 
 NOTES = """## Where the time goes, and what was tried
 
-- Nearly all of the scoring time is exact nearest-neighbour search. Profile of the queries a
-  kitchen5 detection makes in the paper's weight order (3,000 pairs, 961k queries, one
-  thread, 2026-11-21): 85 % lie within 2 cm of a surface and cost 310-360 ns each; 14 % at
-  2-5 cm, 660 ns; 2 % beyond 5 cm, 1.9-4.7 us; 326 ns on average. The rest of a comparison
-  costs about 0.05 us. Queries taken in grid order cost far less than scattered ones
-  (queries on samples: 58 ns in grid order against 393 ns in random order; 2 mm off the
-  samples, in grid order: 137 ns), but reordering the work for locality did not help inside
-  the scoring kernel: test points in grid order, and groups of 8 or 32 neighbouring test
-  points compared keypoint by keypoint so that consecutive queries are centimetres apart,
-  took 11.0-14.2 s against 11.6-13.2 s (5 % test points, run-to-run noise).
-- Kept as an option, not the default: the adaptive keypoint order (half the comparisons per
-  decision on kitchen5, 318 -> 164). Through the neighbour cache at 30 % (2026-11-25, machine
-  otherwise idle) it made 1.50x the candidates/s of the paper's order for placing-bowl on
-  kitchen5 and 1.20x on living-room4, but for sitting-human on living-room4 it took 367.2 s
-  of scoring against 259.6 s (0.71x; identical decisions, accepted scores and predictions):
-  probably because the person's keypoints that fail most often lie far from any surface,
-  where a lookup costs most (not yet measured keypoint by keypoint); its mean comparisons to
-  the decision rose from 281 to 429, since acceptances, which still score every keypoint,
-  come later in that order. The 8 descriptors of the protocol on kitchen5 took 1.46x longer
-  (below). It was the default for a day once, and withdrawn because `itensor evaluate` then
-  ranked rejected pairs by another order's partial scores (judged accuracy 67.4 % ->
-  59.9 %); the evaluation now ranks them by full score and asks for the paper's order
-  itself. Weighting the order by a lookup cost
-  (failure rate / (1 + d / s), d the pilot's mean distance to the surface) was tried for
-  placing only and was no faster (kitchen5, 10 % test points, 1 thread, beside other work:
-  17-19 s for s = 2 cm against 13-15 s unweighted; s = 5-10 cm within the noise); a cost
-  model that makes the order pay for persons is the next thing to measure.
-- Kept: pruning grid cells, rows and slabs by their box distance (2.7 -> 1.3 us per shuffled
-  query); seeding the search from a distance transform of the cell occupancy; comparing
-  cosines instead of angles; handing pairs to threads in chunks of 64 (accepted pairs cost
-  512 comparisons, rejected ones ~120).
-- Where a detection through the neighbour cache spends its time (kitchen5, placing, 30 %,
-  the defaults but one Numba thread, phases timed by a scratch profile, 2026-11-25, beside an
-  evaluation, so the seconds are slow): 99.2 s of scoring, of it 76 % in the scoring kernel
-  (470 M comparisons), 15 % building trees (1,254 builds), 6 % finding the root blocks the
-  next round will reach (`touched_roots`) and 1.4 % collecting requests. Kept: those blocks
-  found from every 4th pair of a round (`CACHE_PREPARE_STRIDE`: neighbours in Z-order reach
-  nearly the same blocks, the rest are built after the round that asked for them): 94.7 s,
-  the kernel's time unchanged. Tried and dropped in the same conditions: leaves of 1 cm
-  (122 s), of 1 cm split past 8 samples (257 s) and of 2 cm split past 8 (270 s): more to
-  build and to descend than the shorter lists save. 4 kB pages under every array cost 5 %
-  (102.0 s against 96.9 s with NumPy's huge pages); the command line now keeps NumPy's
-  arrays on 4 kB pages (memory: see below) and puts only the scene's points and normals on
-  huge pages: 94.4 s against 91.9-95.9 s.
-- Tried and dropped (measured on kitchen5, this machine, 2026-11-21): finer grid cells
-  (1.5 and 2 spacings: slower); a second level of 4x4x4 super-cells for far queries (no
-  gain); sorting test points along a Morton curve (no change beyond noise); exact per-cell
-  candidate lists (2 cm cells) built for each batch: 590k cells and 206 points per list for one
-  1 % batch, 7.4 s to build against 2.3 s for the whole grid-searched run; cheap
-  Delta-failure proofs from the seed cell (simulated: rejections need 108 instead of 124 exact
-  comparisons, not worth a second pass); a cost-aware order (simulated: 3 %); grid cells of
-  4 and 5 spacings instead of 3 (10.0-12.9 s at 5 % test points for all three, run-to-run
-  noise).
-- Approximate nearest neighbours, prototyped and dropped (kitchen5, 5 % test points,
-  adaptive order, against the exact run: 11.4 s, 25,787 accepted pairs): a table over 1 cm
-  voxels holding the exact nearest sample of each voxel centre, filled on first use, answers
-  a keypoint with its voxel's sample. Once filled it scores in 1.76 s (6.5x), 4.8 s with the
-  filling, but only 96.5 % of decisions are identical (8,612 accepted pairs lost) and the
-  top 5 differ. 5 mm voxels: 99.4 %, top 5 differ, and the table is 1 GB. 1 cm voxels plus a
-  greedy walk on an 8-nearest-neighbour graph of the samples: 99.2 % (3.2 s filled), top 5
-  differ. All below the 99.5 % asked for. Why (400 accepted pairs, 1 cm voxels): 3.2 % of
-  keypoint terms change, 94 % of them lost, at keypoints 0.8-1.3 cm from a surface
-  (quartiles; the heavy contact keypoints), where the voxel's sample lies 15-21 mm from the
-  exact nearest one, on the same surface; against a 1 cm test vector that turns it by 17-53
-  degrees (quartiles). The mean accepted score drops from 0.842 to 0.815, next to the 0.807
-  threshold. Exact search for keypoints within 5 cm of the voxel's sample and the table
-  beyond: 99.86 %, top 5 differ, and only 1.5x faster once filled (the near keypoints are
-  the many; both timings of this one were taken beside another job). Using the table's
-  sample only as the starting bound of the exact search stays exact but saves 9 % once
-  filled (10.4 s), less than the filling costs.
-- What one exact query does (kitchen5, the queries of 4,000 weight-order pairs, 1.28 M,
-  one thread, 2026-11-21, session 10): it examines 13.5 grid cells, scans the points of 4.0
-  non-empty ones, 48 points in all, and costs 311 ns in pair order (908 ns shuffled). Float32
-  coordinates with int32 cell starts: 303 ns (and 11 queries in a million answer another
-  point); a branch-free two-pass scan of each cell: 374 ns. Finer cells scan fewer points
-  (2 spacings: 27 points in 5.5 cells; 1 spacing: 13 points in 7.2 cells) but examine 28 and
-  118 cells, which costs more, as the timings above show. The search is close to what a grid
-  can do; 8,000 scored candidates/s would need about 100 ns per comparison (two threads,
-  8 orientations x 317 comparisons per candidate).
-- Measured and not built: a shortcut for flat ground. Of 20,000 of those queries, 64 % have
-  every sample within (nearest distance + 1 cm) on the nearest sample's plane with its
-  normal, and for 96 % of those the nearest sample lies within rho of the foot point, so the
-  surface vector is exactly the normal component and no search would be needed. Proving it
-  without the search is the catch: the samples are random, and a 3 cm cell of 1 cm samples
-  almost always holds a spot farther than rho from every sample (a disk of 8 mm radius is
-  empty with probability 14 %), so per-cell proofs rarely hold and the per-query test is
-  itself a search. Even if every one of those 60 % cost 30 ns, the average comparison would
-  cost about 180 ns instead of 326 (1.8x), not the 4x that 8,000 candidates/s needs.
-- Many affordances: the table of shared 1 cm cells above bounds what the authors'
-  agglomeration could give. Eight example descriptors (two mugs, a bottle, a bowl, a hanger,
-  a handbag, two humans) share only 7 % of their keypoint cells, and one query per cell for
-  all of them is 9.1x the comparisons one descriptor makes exactly with early exit, before any
-  loss of exactness; 2x one affordance is out of reach by sharing queries.
-- A decision cannot need fewer comparisons than the threshold allows: with the calibrated
-  threshold (about 0.81 of the maximum here) an acceptance needs at least 413 of 512
-  keypoints and a rejection at least about 50, so an exact single-descriptor detection stays
-  within a small factor of the adaptive order's 164 comparisons per decision.
+The measurements behind the kept and dropped designs before 2026-11-27 (profiles of a
+query, the adaptive order, approximate neighbours, finer cells, sharing queries between
+descriptors) are in [`HISTORY.md`](HISTORY.md), in the units of their day; those of
+2026-11-27 are in the sections below.
 """
 
 
@@ -594,12 +501,16 @@ def _torch_rate(g: dict) -> str:
     return "candidates not recorded"
 
 
-def markdown(results: dict) -> str:
+def markdown(results: dict, summary: str = "") -> str:
+    """RESULTS.md from a run's figures; ``summary`` (the block between :data:`SUMMARY` and
+    :data:`SUMMARY_END` of the file it replaces, kept as it is) follows the header."""
     lines = ["# Benchmark results", "",
              f"- date: {results['date']}", f"- machine: {results['machine']}",
              f"- command: `{results['command']}`"]
     lines += [f"- then: `{u}`" for u in results.get("updates", [])]
     lines += [""]
+    if summary:
+        lines += [summary.strip("\n"), ""]
     tr = results["train"]["train"]
     lines += ["## Training (median of runs, seconds)", "",
               "| example | samples | bisector points | sampling | bisector | keypoints | calibration | total |",
@@ -756,11 +667,15 @@ def markdown(results: dict) -> str:
     k5 = next(d for d in results["detect"] if d["scene"] == "kitchen5")
     worst_train = max(r["median_s"]["total"] for r in tr)
     eight = next((r for r in m["rows"] if r["descriptors"] == 8), None)
-    lines += ["", "## Against the targets (2 cores, CPU only)", "",
+    lines += ["", "## Against the targets, from this run's figures (2 cores, CPU only)", "",
+              "Issue 16's own measures (the placing-bowl example as `itensor evaluate` trains "
+              "it, the 8 examples, the protocol) are in the summary above; the rows here are "
+              "this run's cases (the paper's bowl with its calibrated S_aff; the many-"
+              "descriptor case's scaled copies at 0.5 %).", "",
               "| target | reached | met |", "|---|---|---|",
               f"| training under 2 s median per example | slowest {worst_train:.2f} s | "
               f"{'yes' if worst_train < 2 else 'no'} |",
-              f"| 8,000 scored candidates/s on kitchen5, placing-bowl, defaults (issue 16) | "
+              f"| 8,000 candidates/s on kitchen5, the paper's bowl, defaults | "
               f"{k5['weight']['candidates_per_s']:.0f} (adaptive order: "
               f"{k5['adaptive']['candidates_per_s']:.0f}) | "
               f"{'yes' if k5['weight']['candidates_per_s'] >= 8000 else 'no'} |",
@@ -768,7 +683,7 @@ def markdown(results: dict) -> str:
               f"{100 * k5['reference']['decision_agreement']:.2f} %, top 5 {k5['reference']['top5_identical']} | "
               f"{'yes' if k5['reference']['decision_agreement'] >= 0.995 and k5['reference']['top5_identical'] else 'no'} |"]
     if eight:
-        lines.append(f"| 8 affordances in one pass at most 3x one (issue 16) | "
+        lines.append(f"| 8 descriptors in one pass at most 3x one (scaled copies, 0.5 %) | "
                      f"{eight['cost_vs_one']:.1f}x | {'yes' if eight['cost_vs_one'] <= 3 else 'no'} |")
     lines.append(f"| 5M-point scene under 2 GB | {b['peak_rss_mb']:.0f} MB | "
                  f"{'yes' if b['peak_rss_mb'] < 2048 else 'no'} |")
@@ -796,16 +711,23 @@ on the same machine (leases 1-2)."""
 
 #: RESULTS.md below this line is written by the other benchmarks' runs and kept as it is
 KEPT = "<!-- the sections below come from the other benchmarks; run.py keeps them -->"
+#: RESULTS.md between these lines (the summary of figures from several benchmarks, written
+#: by hand from their recorded results) is kept as it is, under the header
+SUMMARY = "<!-- summary: written from the benchmarks' recorded results; run.py keeps it -->"
+SUMMARY_END = "<!-- end of summary -->"
 
 
 def write_markdown(path: Path, results: dict) -> None:
-    """``markdown(results)``, then whatever followed :data:`KEPT` in the existing file."""
-    kept = ""
+    """``markdown(results)`` with the existing file's summary (between :data:`SUMMARY` and
+    :data:`SUMMARY_END`), then whatever followed :data:`KEPT` in it."""
+    kept = summary = ""
     if path.exists():
         old = path.read_text()
         if KEPT in old:
             kept = old[old.index(KEPT):]
-    path.write_text(markdown(results) + ("\n" + kept if kept else ""))
+        if SUMMARY in old and SUMMARY_END in old:
+            summary = old[old.index(SUMMARY):old.index(SUMMARY_END) + len(SUMMARY_END)]
+    path.write_text(markdown(results, summary) + ("\n" + kept if kept else ""))
 
 
 def main() -> None:

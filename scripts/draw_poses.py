@@ -5,7 +5,8 @@ reasons printed), to look at before trusting a verdict.
     python scripts/draw_poses.py --objects ../shared/data/objects --scene kitchen1 \\
         --example filling-mug --family standing -o out.png 7.098,10.115,0.884,0 ...
 
-Each pose is ``x,y,z,k``: a scene point and an orientation k of 8. ``--family detection``
+Each pose is ``x,y,z,k``: a scene point and an orientation k of 8, or 16 numbers (a 4x4 pose
+row by row, as the ``pose`` column of ``judgements.csv``, spaces or commas). ``--family detection``
 poses the example as detection does (``InteractionTensor.pose`` at the point, turned by
 k x 45 degrees); ``standing`` stands a filling example's mug on the point, turned about its
 opening's axis (``evaluation.oracle.standing_pose``, the exhaustive filling search's poses).
@@ -33,7 +34,7 @@ def main(argv=None) -> int:
     ap.add_argument("--example", required=True)
     ap.add_argument("--family", choices=("detection", "standing"), default="detection")
     ap.add_argument("-o", "--output", required=True)
-    ap.add_argument("poses", nargs="+", help="x,y,z,k")
+    ap.add_argument("poses", nargs="+", help="x,y,z,k or a 4x4 pose (16 numbers)")
     args = ap.parse_args(argv)
     objects = Path(args.objects)
     ex = interactions.build(args.example, objects)
@@ -49,9 +50,16 @@ def main(argv=None) -> int:
         tensor = interactions.build_descriptor(args.example, objects, example=ex)
     rows = []
     for text in args.poses:
-        x, y, z, k = (float(v) for v in text.split(","))
-        pose = (standing_pose(pivot, [x, y, z], 2 * np.pi * k / 8) if args.family == "standing"
-                else tensor.pose(np.array([x, y, z]), 2 * np.pi * k / 8))
+        values = [float(v) for v in text.replace(",", " ").split()]
+        if len(values) == 16:
+            pose = np.array(values).reshape(4, 4)
+        elif len(values) == 4:
+            x, y, z, k = values
+            pose = (standing_pose(pivot, [x, y, z], 2 * np.pi * k / 8)
+                    if args.family == "standing"
+                    else tensor.pose(np.array([x, y, z]), 2 * np.pi * k / 8))
+        else:
+            ap.error(f"{text!r}: expected x,y,z,k or 16 numbers")
         v = judge.judge(js, pose)
         print(f"{text}: {'valid' if v.valid else 'invalid: ' + '; '.join(v.reasons)}")
         colour = P.VALID if v.valid else P.INVALID

@@ -35,21 +35,34 @@ def main(argv=None) -> int:
     ap.add_argument("--objects", required=True)
     ap.add_argument("--example", required=True)
     ap.add_argument("--scene", required=True)
-    ap.add_argument("--box", nargs=2, type=_xyz, required=True, metavar="X,Y,Z",
-                    help="lower and upper corners (m)")
+    ap.add_argument("--box", nargs=2, type=_xyz, default=None, metavar="X,Y,Z",
+                    help="lower and upper corners (m); default: the whole scene")
     ap.add_argument("--orientations", type=int, default=8)
     ap.add_argument("--cell", type=float, default=None, help="one sample per cell (m)")
+    ap.add_argument("--cell-3d", action="store_true",
+                    help="one sample per cell cube, not per cell in plan (a whole room)")
+    ap.add_argument("--valid-csv", default=None,
+                    help="write the valid poses here (x, y, z, orientation)")
     args = ap.parse_args(argv)
     ex = interactions.build(args.example, args.objects)
     tensor = interactions.build_descriptor(args.example, args.objects, example=ex)
     js = JudgeScene(load_geometry(args.scene))
+    if args.box is None:
+        args.box = (tuple(js.points.min(axis=0) - 1e-6), tuple(js.points.max(axis=0) + 1e-6))
     t0 = time.perf_counter()
     res = region_poses(js, Judge.for_example(ex), tensor, args.box[0], args.box[1],
-                       args.orientations, args.cell)
+                       args.orientations, args.cell, cell_3d=args.cell_3d, progress=True)
+    if args.valid_csv:
+        with open(args.valid_csv, "w") as f:
+            f.write("scene,example,x,y,z,orientation\n")
+            for i, k in res.valid:
+                x, y, z = res.points[i]
+                f.write(f"{Path(args.scene).stem},{args.example},{x:.4f},{y:.4f},{z:.4f},{k}\n")
     why = ", ".join(f"{r} {c}" for r, c in res.reasons.most_common(4))
     print("| scene | example | box (m) | samples | orientations | poses | valid | reasons | s |")
     print("|---|---|---|---:|---:|---:|---:|---|---:|")
-    print(f"| {Path(args.scene).stem} | {args.example} | {args.box[0]} - {args.box[1]} | "
+    box = " - ".join(",".join(f"{v:.2f}" for v in c) for c in args.box)
+    print(f"| {Path(args.scene).stem} | {args.example} | {box} | "
           f"{res.samples:,} | {args.orientations} | {res.poses:,} | {len(res.valid)} | {why} | "
           f"{time.perf_counter() - t0:.0f} |")
     for i, k in res.valid[:20]:

@@ -92,3 +92,20 @@ def test_a_stool_under_a_table_holds_none(sitter):
     res = O.region_poses(js, judge, tensor, (-0.2, -0.2, 0.4), (0.2, 0.2, 0.5), cell=0.1)
     assert res.samples >= 9 and not res.valid
     assert res.reasons["body penetrates the scene deeply"] > 0
+
+
+def test_a_room_search_keeps_the_seat_over_the_floor(sitter):
+    """One sample per cell cube (``cell_3d``, a whole room): the stool's seat and the floor
+    under it both keep samples, and the sitters found are on the seat; one per cell in plan
+    keeps a single layer."""
+    tensor, judge = sitter
+    js = JudgeScene(_room([box((0.0, 0.0, 0.42), (0.4, 0.4, 0.06))]
+                          + [box((x, y, 0.195), (0.04, 0.04, 0.39))
+                             for x in (-0.17, 0.17) for y in (-0.17, 0.17)]))
+    lo, hi = (-0.4, -0.4, -0.1), (0.4, 0.4, 0.6)
+    room = O.region_poses(js, judge, tensor, lo, hi, n_orient=4, cell=0.2, cell_3d=True)
+    plan = O.region_poses(js, judge, tensor, lo, hi, n_orient=1, cell=0.2)
+    z = room.points[:, 2]
+    assert (z > 0.4).sum() >= 4 and (z < 0.05).sum() >= 9
+    assert plan.samples < room.samples
+    assert room.valid and all(room.points[i][2] > 0.4 for i, _ in room.valid)

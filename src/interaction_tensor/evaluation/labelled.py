@@ -570,6 +570,18 @@ HAND_POSED: list = [
      "on a chair seat under a desk's edge, no tap, no sink", "office-desk6 chair"),
     ("filling", "scenes/office-desk6.ply", (0.94, 1.143, 0.444), 0.0, False,
      "on a chair seat under a desk's edge, no tap, no sink", "office-desk6 chair"),
+    # found by the search of the riding descriptor's poses over whole scenes (one sample per
+    # 10 cm cube, evaluation/oracle.region_poses, 2026-11-27), drawn and labelled by eye:
+    # riders crouched on a kitchen counter, the seat on a tap's spout (kitchen1, over its
+    # double sink's divider) or on a sink's rim (kitchen3). The judge passes both: its two
+    # known errors on the set. A seat-width rule (support under the seat at least 7 cm
+    # across) rejected them but also 15 of the 38 published top riders it passes, astride
+    # chair backs and 5 cm cubicle partitions, which earlier sessions took for pretend
+    # riding; no rule was kept until a person decides those (docs/results/oracle-2026-11-27)
+    ("riding", "scenes/kitchen1.ply", (7.1047, 10.1444, 1.0942), math.pi / 2, False,
+     "seat on a tap's spout, feet in the sink", "kitchen1 sink"),
+    ("riding", "scenes/kitchen3.ply", (3.2023, 2.8681, 0.905), 0.0, False,
+     "seat on a sink's rim, feet on the counter", "kitchen3 sink"),
 ]
 
 

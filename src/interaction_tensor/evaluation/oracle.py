@@ -152,11 +152,13 @@ def standing_filling(js: JudgeScene, judge: Judge, support_point, max_tilt: floa
 
 
 def region_poses(js: JudgeScene, judge: Judge, tensor, lo, hi, n_orient: int = 8,
-                 cell: float | None = None, max_tilt: float = 15.0) -> Search:
+                 cell: float | None = None, max_tilt: float = 15.0,
+                 cell_3d: bool = False, progress: bool = False) -> Search:
     """The descriptor's poses (:meth:`~.InteractionTensor.pose`: the family detection
     proposes) at every judge sample in the box [``lo``, ``hi``] whose normal line is within
     ``max_tilt`` degrees of the descriptor's N_aff line (one per ``cell`` m in plan when
-    given), in ``n_orient`` orientations, each judged (:func:`judge_in_order`)."""
+    given, or per ``cell`` m cube with ``cell_3d``: a whole room, where a table stands over
+    the floor), in ``n_orient`` orientations, each judged (:func:`judge_in_order`)."""
     lo, hi = np.asarray(lo, float), np.asarray(hi, float)
     n_aff = np.asarray(tensor.affordance_normal, float)
     n_aff = n_aff / np.linalg.norm(n_aff)
@@ -164,13 +166,15 @@ def region_poses(js: JudgeScene, judge: Judge, tensor, lo, hi, n_orient: int = 8
          & (np.abs(js.normals @ n_aff) >= np.cos(np.radians(max_tilt))))
     at = js.points[m]
     if cell:
-        _, first = np.unique(np.floor(at[:, :2] / cell).astype(np.int64), axis=0,
-                             return_index=True)
+        _, first = np.unique(np.floor(at[:, :3 if cell_3d else 2] / cell).astype(np.int64),
+                             axis=0, return_index=True)
         at = at[np.sort(first)]
     cheap = cheap_judge(judge)
     out = Search(samples=len(at), poses=n_orient * len(at))
     out.pretest = out.poses
-    for i, p in enumerate(at):
+    from tqdm import tqdm
+
+    for i, p in enumerate(tqdm(at, desc="samples", disable=not progress)):
         for k in range(n_orient):
             v = judge_in_order(js, judge, cheap, tensor.pose(p, 2 * np.pi * k / n_orient))
             out.judged += 1
