@@ -616,6 +616,11 @@ def markdown(results: dict, summary: str = "") -> str:
     m = results["many"]
     lines += ["", f"## Many affordances in one pass ({m['scene']}, {m['test_points']} test "
                   "points; shared test points and scene index, exact)", "",
+              "The 8 paper examples (procedural query objects) and copies scaled 0.8-1.3x, "
+              "at 0.5 % test points; \"one\" is the first of them, filling-mug, the cheapest "
+              "per candidate, so the ratios say how the cost grows with the number of "
+              "descriptors, not issue 16's 8 against one (placing-bowl as `itensor evaluate` "
+              "trains it, at 30 %: the summary above, `many_vs_one.py`).", "",
               "| descriptors | deciding s (placement tests and scoring) | cost vs one | cost per "
               "descriptor vs one |", "|---|---|---|---|"]
     for r in m["rows"]:
@@ -666,12 +671,11 @@ def markdown(results: dict, summary: str = "") -> str:
     # the issue's targets, read off the figures above
     k5 = next(d for d in results["detect"] if d["scene"] == "kitchen5")
     worst_train = max(r["median_s"]["total"] for r in tr)
-    eight = next((r for r in m["rows"] if r["descriptors"] == 8), None)
     lines += ["", "## Against the targets, from this run's figures (2 cores, CPU only)", "",
               "Issue 16's own measures (the placing-bowl example as `itensor evaluate` trains "
               "it, the 8 examples, the protocol) are in the summary above; the rows here are "
               "this run's cases (the paper's bowl with its calibrated S_aff; the many-"
-              "descriptor case's scaled copies at 0.5 %).", "",
+              "descriptor case is no measure of a target: its one is the cheapest).", "",
               "| target | reached | met |", "|---|---|---|",
               f"| training under 2 s median per example | slowest {worst_train:.2f} s | "
               f"{'yes' if worst_train < 2 else 'no'} |",
@@ -682,9 +686,6 @@ def markdown(results: dict, summary: str = "") -> str:
               f"| >= 99.5 % identical decisions, identical top 5 | "
               f"{100 * k5['reference']['decision_agreement']:.2f} %, top 5 {k5['reference']['top5_identical']} | "
               f"{'yes' if k5['reference']['decision_agreement'] >= 0.995 and k5['reference']['top5_identical'] else 'no'} |"]
-    if eight:
-        lines.append(f"| 8 descriptors in one pass at most 3x one (scaled copies, 0.5 %) | "
-                     f"{eight['cost_vs_one']:.1f}x | {'yes' if eight['cost_vs_one'] <= 3 else 'no'} |")
     lines.append(f"| 5M-point scene under 2 GB | {b['peak_rss_mb']:.0f} MB | "
                  f"{'yes' if b['peak_rss_mb'] < 2048 else 'no'} |")
     lines += ["", NOTES]
