@@ -524,7 +524,8 @@ def markdown(results: dict, summary: str = "") -> str:
     lines += ["## Detection (placing-bowl, paper criterion, weighted keypoints, Numba backend)", "",
               "`weight` is the default keypoint order (the paper's); `adaptive` compares first "
               "the keypoints that fail most often on a seeded pilot of the scene's own pairs "
-              "(faster for this bowl, slower for a person: see the notes below). Both decide "
+              "(faster for this bowl, slower for a person: measured in HISTORY.md and in "
+              "*Keypoint order* below). Both decide "
               "exactly alike and give the same accepted scores and top 5; only the partial "
               "scores kept by rejected pairs differ (README). Both answer nearest neighbours "
               "from the neighbour cache, the default at 30 % test points; `grid` is the weight "
