@@ -24,13 +24,12 @@ test, with the judge's reasons).
 from __future__ import annotations
 
 import argparse
-import csv
 import time
 from pathlib import Path
 
 import numpy as np
 
-from interaction_tensor.evaluation.common import ranking_radius
+from interaction_tensor.evaluation.common import ranking_radius, write_csv
 from interaction_tensor.evaluation.judge import Judge, JudgeScene
 from interaction_tensor.evaluation.oracle import standing_filling
 from interaction_tensor.examples import interactions
@@ -38,14 +37,15 @@ from interaction_tensor.io import load_geometry
 from interaction_tensor.predictions import top_k
 
 
+ORACLE_COLUMNS = ["scene", "example", "support_samples", "poses", "tap_pretest", "tap_test",
+                  "valid", "valid_places", "seconds"]
+NEAR_COLUMNS = ["scene", "example", "x", "y", "z", "orientation", "valid", "reasons"]
+
+
 def _write(out: Path, rows: list, near: list) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    for fname, data in (("oracle.csv", rows), ("near.csv", near)):
-        with open(out / fname, "w", newline="") as f:
-            if data:
-                w = csv.DictWriter(f, fieldnames=list(data[0]))
-                w.writeheader()
-                w.writerows(data)
+    write_csv(out / "oracle.csv", rows, ORACLE_COLUMNS)
+    write_csv(out / "near.csv", near, NEAR_COLUMNS)
 
 
 def main(argv=None) -> int:

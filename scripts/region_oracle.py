@@ -17,6 +17,7 @@ import argparse
 import time
 from pathlib import Path
 
+from interaction_tensor.evaluation.common import write_csv
 from interaction_tensor.evaluation.judge import Judge, JudgeScene
 from interaction_tensor.evaluation.oracle import region_poses
 from interaction_tensor.examples import interactions
@@ -53,11 +54,11 @@ def main(argv=None) -> int:
     res = region_poses(js, Judge.for_example(ex), tensor, args.box[0], args.box[1],
                        args.orientations, args.cell, cell_3d=args.cell_3d, progress=True)
     if args.valid_csv:
-        with open(args.valid_csv, "w") as f:
-            f.write("scene,example,x,y,z,orientation\n")
-            for i, k in res.valid:
-                x, y, z = res.points[i]
-                f.write(f"{Path(args.scene).stem},{args.example},{x:.4f},{y:.4f},{z:.4f},{k}\n")
+        write_csv(Path(args.valid_csv),
+                  [{"scene": Path(args.scene).stem, "example": args.example,
+                    "x": float(res.points[i, 0]), "y": float(res.points[i, 1]),
+                    "z": float(res.points[i, 2]), "orientation": k} for i, k in res.valid],
+                  ["scene", "example", "x", "y", "z", "orientation"])
     why = ", ".join(f"{r} {c}" for r, c in res.reasons.most_common(4))
     print("| scene | example | box (m) | samples | orientations | poses | valid | reasons | s |")
     print("|---|---|---|---:|---:|---:|---:|---|---:|")

@@ -72,11 +72,15 @@ def _room(extra):
     return _geometry([box((0.0, 0.0, -0.01), (4.0, 4.0, 0.02))] + extra, "test room")
 
 
+def _stool() -> list:
+    """A 0.45 m stool at the origin: a 40 cm seat on four legs."""
+    return [box((0.0, 0.0, 0.42), (0.4, 0.4, 0.06))] + \
+        [box((x, y, 0.195), (0.04, 0.04, 0.39)) for x in (-0.17, 0.17) for y in (-0.17, 0.17)]
+
+
 def test_a_stool_in_the_open_holds_a_sitter(sitter):
     tensor, judge = sitter
-    js = JudgeScene(_room([box((0.0, 0.0, 0.42), (0.4, 0.4, 0.06))]
-                          + [box((x, y, 0.195), (0.04, 0.04, 0.39))
-                             for x in (-0.17, 0.17) for y in (-0.17, 0.17)]))
+    js = JudgeScene(_room(_stool()))
     res = O.region_poses(js, judge, tensor, (-0.2, -0.2, 0.4), (0.2, 0.2, 0.5), cell=0.1)
     assert res.samples >= 9 and res.valid, res.reasons
 
@@ -85,10 +89,7 @@ def test_a_stool_under_a_table_holds_none(sitter):
     """The seat of a stool pushed under a table top 30 cm above it: the body crosses the
     table in every orientation (office-desk1's chair, kitchen1's chairs)."""
     tensor, judge = sitter
-    js = JudgeScene(_room([box((0.0, 0.0, 0.42), (0.4, 0.4, 0.06)),
-                           box((0.0, 0.0, 0.735), (1.2, 1.2, 0.03))]
-                          + [box((x, y, 0.195), (0.04, 0.04, 0.39))
-                             for x in (-0.17, 0.17) for y in (-0.17, 0.17)]))
+    js = JudgeScene(_room(_stool() + [box((0.0, 0.0, 0.735), (1.2, 1.2, 0.03))]))
     res = O.region_poses(js, judge, tensor, (-0.2, -0.2, 0.4), (0.2, 0.2, 0.5), cell=0.1)
     assert res.samples >= 9 and not res.valid
     assert res.reasons["body penetrates the scene deeply"] > 0
@@ -99,9 +100,7 @@ def test_a_room_search_keeps_the_seat_over_the_floor(sitter):
     under it both keep samples, and the sitters found are on the seat; one per cell in plan
     keeps a single layer."""
     tensor, judge = sitter
-    js = JudgeScene(_room([box((0.0, 0.0, 0.42), (0.4, 0.4, 0.06))]
-                          + [box((x, y, 0.195), (0.04, 0.04, 0.39))
-                             for x in (-0.17, 0.17) for y in (-0.17, 0.17)]))
+    js = JudgeScene(_room(_stool()))
     lo, hi = (-0.4, -0.4, -0.1), (0.4, 0.4, 0.6)
     room = O.region_poses(js, judge, tensor, lo, hi, n_orient=4, cell=0.2, cell_3d=True)
     plan = O.region_poses(js, judge, tensor, lo, hi, n_orient=1, cell=0.2)
