@@ -576,8 +576,9 @@ HAND_POSED: list = [
     # double sink's divider) or on a sink's rim (kitchen3). The judge passes both: its two
     # known errors on the set. A seat-width rule (support under the seat at least 7 cm
     # across) rejected them but also 15 of the 38 published top riders it passes, astride
-    # chair backs and 5 cm cubicle partitions, which earlier sessions took for pretend
-    # riding; no rule was kept until a person decides those (docs/results/oracle-2026-11-27)
+    # 5 cm panels and the edges of boxes, desk tops and counters, which earlier sessions took
+    # for pretend riding; no rule was kept until a person decides those
+    # (docs/results/oracle-2026-11-27)
     ("riding", "scenes/kitchen1.ply", (7.1047, 10.1444, 1.0942), math.pi / 2, False,
      "seat on a tap's spout, feet in the sink", "kitchen1 sink"),
     ("riding", "scenes/kitchen3.ply", (3.2023, 2.8681, 0.905), 0.0, False,
