@@ -123,6 +123,26 @@ def test_point_clouds_and_descriptors_without_a_depth_skip_the_test(hanging):
                                     test_indices=top[:10])).reason.startswith("off")
 
 
+def test_a_captured_surface_s_noise_is_allowed_on_top_of_the_depth():
+    """A captured surface (an RGB-D frame's triangles) strays from its cleaned points by its
+    noise; the collision test allows it on top of each test's depth. A bowl 1.3 cm into the
+    top fails placing's 1 cm test, and passes it on a surface with 5 mm of noise."""
+    import dataclasses
+
+    bowl = interactions.build_descriptor("placing-bowl")
+    assert bowl.collision_tests == ((0.01, None),)
+    scene, top = _desk()
+    vertices, faces = scene.mesh
+    raised = dataclasses.replace(scene, mesh=(vertices + [0, 0, 0.013], faces),
+                                 _collider=None)     # the samples 1.3 cm under the surface
+    settings = it.DetectSettings(**{**OPEN, "top_k": 1})
+    det = it.detect(raised, bowl, settings, test_indices=top[::40])
+    assert det.predictions == [] and det.stats["pairs_failing_collision"] > 0
+    noisy = dataclasses.replace(raised, surface_noise=0.005, _collider=None)
+    det = it.detect(noisy, bowl, settings, test_indices=top[::40])
+    assert len(det.predictions) == 1 and det.stats["pairs_failing_collision"] == 0
+
+
 def test_the_collision_setting_survives_a_file_and_a_bad_one_is_refused(hanging, tmp_path):
     _, tensor = hanging
     tensor.set_acceptance(tensor.threshold(), collision=[(0.03, 0.0), (0.05, None)],

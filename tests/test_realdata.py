@@ -138,6 +138,129 @@ def test_small_frame_back_projection(tmp_path):
     assert np.allclose(g.vertices[0], [(u - 31.5) * 1.5 / 50, (v - 23.5) * 1.5 / 50, 1.5])
 
 
+def _faces_normals(points, faces):
+    a, b, c = points[faces[:, 0]], points[faces[:, 1]], points[faces[:, 2]]
+    return np.cross(b - a, c - a)
+
+
+def test_depth_faces_join_neighbours_and_leave_steps_open(tmp_path):
+    intr = rd.load_intrinsics(_write_intrinsics(tmp_path / "i.json"))
+    # a flat wall 1.5 m away: every square of neighbouring pixels gives two triangles, all
+    # facing the camera, each joining pixels one apart
+    flat = np.full((48, 64), 1.5)
+    points, _ = rd.back_project(flat, intr)
+    faces = rd.depth_faces(flat)
+    assert faces.shape == (2 * 47 * 63, 3) and faces.dtype == np.int64
+    assert np.all(_faces_normals(points, faces)[:, 2] < 0)            # toward the camera
+    edges = np.linalg.norm(points[faces] - points[faces[:, [1, 2, 0]]], axis=2)
+    assert edges.max() < 2 * 1.5 / 50                                 # a diagonal at most
+    # a step of 0.5 m (a box's edge against the wall behind it) and a hole stay open;
+    # a ramp of 1 cm per pixel (a floor seen at a grazing angle) stays joined
+    depth = np.full((48, 64), 1.5)
+    depth[:, 32:] = 1.0
+    depth[10:14, 5:9] = 0.0
+    depth[30:, :32] = 1.5 + 0.01 * np.arange(18)[:, None]
+    points, valid = rd.back_project(depth, intr)
+    faces = rd.depth_faces(depth)
+    z = points[faces][:, :, 2]
+    assert np.all(z.max(axis=1) - z.min(axis=1) <= 0.01 + 0.02 * z.min(axis=1) + 1e-12)
+    assert not np.any((z.min(axis=1) < 1.2) & (z.max(axis=1) > 1.2))  # nothing spans the step
+    u = np.nonzero(valid)[1]
+    assert np.all(u[faces].max(axis=1) - u[faces].min(axis=1) <= 1)
+    ramp = (np.nonzero(valid)[0][faces].min(axis=1) >= 30) & (u[faces].max(axis=1) <= 31)
+    assert ramp.sum() == 2 * 17 * 31                                  # the ramp, all joined
+    n_valid = int(valid.sum())
+    assert faces.min() >= 0 and faces.max() < n_valid
+    # a large image is joined on every k-th pixel: the count stays bounded
+    big = np.full((480, 640), 2.0)
+    few = rd.depth_faces(big, max_faces=20_000)
+    assert 0 < len(few) <= 20_000 and len(np.unique(few)) < 480 * 640 / 4
+
+
+def test_frame_and_scan_keep_their_surface(tmp_path):
+    """A frame's triangles (and a scanned mesh's own) become the scene's mesh, moved by the
+    same alignment as its points, so that detection's collision test runs on captured data."""
+    intr = _write_intrinsics(tmp_path / "i.json")
+    depth = _write_depth(tmp_path / "d.png")
+    frame = it.load_scene(depth=str(depth), intrinsics=str(intr), align=False)
+    g, _ = rd.rgbd_to_geometry(None, depth, rd.load_intrinsics(intr), surface=True)
+    assert frame.mesh is not None and len(frame.mesh[1]) == 2 * 47 * 63
+    t = frame.report.transform
+    assert np.allclose(frame.mesh[0], g.vertices @ t[:3, :3].T + t[:3, 3])
+    # the flat wall faces the camera, so after the level-camera turn it stands 1.5 m ahead:
+    # its points and its triangles agree
+    assert np.allclose(frame.mesh[0][:, 1], frame.points[:, 1].mean(), atol=1e-6)
+    assert frame.collider() is not None
+    # a point cloud scan has no triangles; a mesh scan keeps its own, aligned
+    cloud = rd.prepare_real_scene(it.Geometry(_room_cloud(noise=0.0)), SPACING)[0]
+    assert cloud.mesh is None and cloud.collider() is None
+    mesh = parts_mesh(room_shell((3.0, 3.0)) + table("t", (1.5, 1.6), (1.2, 0.8), 0.74))
+    rot = _rotation((1, 0, 0), -90.0)                                  # stored Y-up
+    scan = it.Geometry(mesh.vertices @ rot.T, np.asarray(mesh.faces), source="scan.ply")
+    scene, report = rd.prepare_real_scene(scan, SPACING, up="y")
+    t = report.transform
+    assert np.allclose(scene.mesh[0], scan.vertices @ t[:3, :3].T + t[:3, 3])
+    assert np.array_equal(scene.mesh[1], scan.faces)
+    # levelled again: every vertex at its own height, shifted by one constant
+    dz = scene.mesh[0][:, 2] - np.asarray(mesh.vertices)[:, 2]
+    assert np.ptp(dz) < 0.01
+
+
+def test_surface_noise_measures_the_spread_not_the_edges():
+    from scipy.spatial import cKDTree
+
+    from interaction_tensor.realdata.pipeline import surface_noise
+
+    rng = np.random.default_rng(0)
+    grid = np.stack(np.meshgrid(np.arange(0, 1, 0.01), np.arange(0, 1, 0.01)), -1).reshape(-1, 2)
+    points = np.c_[grid, np.zeros(len(grid))]
+    normals = np.tile([0.0, 0.0, 1.0], (len(points), 1))
+    tree = cKDTree(points)
+    vertices = np.c_[rng.uniform(0, 1, (50_000, 2)), rng.normal(0, 0.003, 50_000)]
+    assert surface_noise(vertices, points, normals, tree) == pytest.approx(0.009, rel=0.1)
+    # a few vertices on another surface (a depth edge) do not count
+    vertices[:2_000, 2] += 0.3
+    assert surface_noise(vertices, points, normals, tree) == pytest.approx(0.009, rel=0.15)
+    vertices[:, 2] = 0.0
+    assert surface_noise(vertices, points, normals, tree) == 0.0
+    assert surface_noise(vertices, points, normals, tree, seed=1) == 0.0
+
+
+def test_tum_surface_collision_test():
+    """On the TUM frame the scene's mesh is the frame's surface: a thin plate 2.5 cm above a
+    clear patch of the desk top is clear of it, a block through the top's height is not, and
+    neither is a post through it; so detection's collision test runs on the frame. The
+    surface's noise is measured (under 1 cm at this spacing)."""
+    from interaction_tensor.collision import Body, MeshCollider, box
+
+    frame = shared_file("rgbd/tum_desk/depth.png").parent
+    scene = it.load_scene(str(frame), spacing=SPACING)
+    assert scene.mesh is not None and len(scene.mesh[1]) > 400_000
+    assert 0.002 < scene.surface_noise < 0.01
+    assert scene.report.to_dict()["surface_noise_m"] == pytest.approx(scene.surface_noise,
+                                                                       abs=1e-5)
+    collider = scene.collider()
+    assert isinstance(collider, MeshCollider)
+    vertices = scene.mesh[0]
+    top = scene.points[(np.abs(scene.points[:, 2] - 0.72) < 0.03) & (scene.normals[:, 2] > 0.95)]
+    # a desk-top point whose surface within 8 cm (the frame's own vertices, 15 cm up and
+    # down) lies within 1.5 cm of one height: nothing on the top there, no edge
+    centre = None
+    for p in top[::20]:
+        v = vertices[(np.linalg.norm(vertices[:, :2] - p[:2], axis=1) < 0.08)
+                     & (np.abs(vertices[:, 2] - p[2]) < 0.15)]
+        if len(v) > 200 and np.all(np.abs(v[:, 2] - np.median(v[:, 2])) < 0.015):
+            centre = np.r_[p[:2], np.median(v[:, 2])]
+            break
+    assert centre is not None, "no clear patch of the desk top"
+    pose = np.eye(4)
+    pose[:3, 3] = centre + [0, 0, 0.025]
+    assert not collider.collides(Body(*box((-0.05, -0.05, 0), (0.05, 0.05, 0.001))), pose)
+    pose[:3, 3] = centre
+    assert collider.collides(Body(*box((-0.05, -0.05, -0.03), (0.05, 0.05, 0.03))), pose)
+    assert collider.collides(Body(*box((-0.01, -0.01, -0.1), (0.01, 0.01, 0.1))), pose)
+
+
 def test_mismatched_sizes(tmp_path):
     intr = rd.load_intrinsics(_write_intrinsics(tmp_path / "i.json"))
     small_depth = _write_depth(tmp_path / "small_depth.png", 32, 24)

@@ -147,9 +147,11 @@ def load_scene(scene=None, spacing: float = 0.01, *, scan: bool = False, normals
 
     A captured scene (frame, scan) has ``captured`` set, so that detection defaults to the
     gaussian criterion, and ``report`` (what cleaning and alignment did, with the transform
-    from the input frame).
+    from the input frame). A frame's ``mesh`` is its depth image's triangles
+    (:func:`~.realdata.depth_faces`), a mesh scan's its own, both aligned with the points and
+    with their ``surface_noise``: detection's collision test runs on them.
     """
-    from .io import as_geometry
+    from .io import Geometry, as_geometry
     from .scene import Scene, prepare_scene
 
     if isinstance(scene, Scene):
@@ -185,17 +187,24 @@ def load_scene(scene=None, spacing: float = 0.01, *, scan: bool = False, normals
         color, depth, intrinsics = _frame_paths(scene if is_dir else None, color, depth,
                                                 intrinsics, scene)
         t = time.perf_counter()
-        geometry, camera, intr = load_rgbd(color, depth, intrinsics, depth_scale, depth_trunc)
+        frame, camera, intr = load_rgbd(color, depth, intrinsics, depth_scale, depth_trunc,
+                                        surface=True)
         t_conv = time.perf_counter() - t
-        geometry.source = f"{depth}" + (f" + {color}" if color else "")
+        # the measured points are the scene; the triangles joining them, for the collision test
+        geometry = Geometry(frame.vertices, None, None, frame.colors,
+                            f"{depth}" + (f" + {color}" if color else ""), list(frame.notes))
+        surface = (frame.vertices, frame.faces) if frame.is_mesh else None
         prepared, report = prepare_real_scene(geometry, spacing, camera, up=up, seed=seed,
-                                              max_points=max_points, **cleaning)
+                                              max_points=max_points, surface=surface,
+                                              **cleaning)
         report.intrinsics = intr.to_dict()
         report.steps.insert(0, {"step": "rgbd_back_projection",
                                 "points_before": intr.width * intr.height,
                                 "points_after": len(geometry.vertices),
                                 "parameters": {"depth_scale": intr.depth_scale,
-                                               "depth_trunc_m": intr.depth_trunc},
+                                               "depth_trunc_m": intr.depth_trunc,
+                                               "surface_triangles": 0 if surface is None
+                                               else len(surface[1])},
                                 "seconds": round(t_conv, 4)})
         report.seconds["rgbd_back_projection"] = t_conv
     else:

@@ -34,9 +34,14 @@ class Scene:
     report : for captured data, the :class:`~interaction_tensor.realdata.RealSceneReport` of
         its cleaning and alignment (the transform from the input frame); else None
     notes : what loading changed that the user should know (the reader's notes)
-    mesh : for a scene sampled from a triangle mesh, its (V, 3) float64 vertices (m) and
-        (F, 3) int64 faces, which detection's collision test uses (:meth:`collider`); None
-        for point clouds and frames
+    mesh : the scene's triangles, (V, 3) float64 vertices (m) and (F, 3) int64 faces, which
+        detection's collision test uses (:meth:`collider`): the mesh it was sampled from, a
+        scanned mesh's own or an RGB-D frame's surface (:func:`~.realdata.depth_faces`), in
+        the scene's frame; None for point clouds
+    surface_noise : how far (m) the triangles of a captured surface stray from the surface
+        through its cleaned points (three robust standard deviations of the vertices'
+        distances along the points' normals, :func:`~.realdata.pipeline.surface_noise`);
+        detection's collision test allows it on top of each test's depth. 0 for meshes
     """
 
     points: np.ndarray
@@ -48,6 +53,7 @@ class Scene:
     report: object = field(default=None, repr=False)
     notes: list = field(default_factory=list, repr=False)
     mesh: tuple | None = field(default=None, repr=False)
+    surface_noise: float = 0.0
     _tree: cKDTree | None = field(default=None, repr=False)
     _grid: object = field(default=None, repr=False)
     _collider: object = field(default=None, repr=False)

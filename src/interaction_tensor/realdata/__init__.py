@@ -37,7 +37,7 @@ from .outputs import write_input_frame_outputs  # noqa: F401
 from .pipeline import (PLAUSIBLE_EXTENT_M, RealSceneReport, prepare_real_scene,  # noqa: F401
                        unit_warnings)
 from .rgbd import (DEFAULT_DEPTH_SCALE, DEFAULT_DEPTH_TRUNC, Intrinsics,  # noqa: F401
-                   back_project, load_intrinsics, load_rgbd, read_color, read_depth,
+                   back_project, depth_faces, load_intrinsics, load_rgbd, read_color, read_depth,
                    rgbd_to_geometry)
 
 __all__ = [
@@ -46,6 +46,6 @@ __all__ = [
     "rotation_between_frames", "estimate_normals_o3d", "orient_normals",
     "remove_statistical_outliers", "voxel_down_sample", "write_input_frame_outputs",
     "PLAUSIBLE_EXTENT_M", "RealSceneReport", "prepare_real_scene", "unit_warnings",
-    "DEFAULT_DEPTH_SCALE", "DEFAULT_DEPTH_TRUNC", "Intrinsics", "back_project",
+    "DEFAULT_DEPTH_SCALE", "DEFAULT_DEPTH_TRUNC", "Intrinsics", "back_project", "depth_faces",
     "load_intrinsics", "load_rgbd", "read_color", "read_depth", "rgbd_to_geometry",
 ]

@@ -53,6 +53,7 @@ class RealSceneReport:
     colors : (N, 3) uint8 colours of the scene points, or None (not written to JSON)
     warnings : things the user should check (units, no plane found, ...)
     seconds : per stage
+    surface_noise : (m) the captured surface's noise (:func:`surface_noise`), 0 without one
     """
 
     source: str
@@ -68,6 +69,7 @@ class RealSceneReport:
     warnings: list = field(default_factory=list)
     seconds: dict = field(default_factory=dict)
     intrinsics: dict | None = None
+    surface_noise: float = 0.0
 
     @property
     def inverse(self) -> np.ndarray:
@@ -88,6 +90,7 @@ class RealSceneReport:
             "camera_aligned_frame": None if self.camera_aligned is None
             else [float(v) for v in self.camera_aligned],
             "normals_oriented": self.normals,
+            "surface_noise_m": round(float(self.surface_noise), 5),
             "intrinsics": self.intrinsics,
             "steps": self.steps,
             "warnings": self.warnings,
@@ -114,7 +117,7 @@ def prepare_real_scene(geometry: Geometry, spacing: float = 0.01, camera=None, *
                        outlier_neighbors: int = 20, outlier_std: float = 2.0,
                        plane_distance: float = 0.02, normals: str | None = None,
                        scale: float = 1.0, kind: str | None = None, seed: int = 0,
-                       max_points: int = 5_000_000):
+                       max_points: int = 5_000_000, surface=None):
     """Clean and gravity-align a captured scene, and wrap it as a :class:`Scene`.
 
     Parameters
@@ -137,6 +140,11 @@ def prepare_real_scene(geometry: Geometry, spacing: float = 0.01, camera=None, *
     normals : ``"camera"`` (default with a camera), ``"up"`` (default otherwise) or ``"none"``
     scale : the factor already applied to the input (recorded in the transform)
     kind : ``"rgbd"`` or ``"scan"`` (default: ``"rgbd"`` when ``camera`` is given)
+    surface : (vertices (V, 3), faces (F, 3)) in the input frame, the captured surface (an
+        RGB-D frame's :func:`~.rgbd.depth_faces`); None: a mesh geometry's own triangles. It
+        is moved into the aligned frame and kept as the scene's ``mesh``, on which detection
+        tests its ranked placements for collision; without it (a point cloud) that test is
+        off
 
     Returns
     -------
@@ -242,9 +250,43 @@ def prepare_real_scene(geometry: Geometry, spacing: float = 0.01, camera=None, *
     report.transform = transform @ s
     report.colors = colors
     report.seconds["total"] = time.perf_counter() - t_all
+    if surface is None and geometry.is_mesh:
+        surface = (geometry.vertices, geometry.faces)
+    mesh, noise = None, 0.0
+    if surface is not None:
+        t = time.perf_counter()
+        vertices = np.asarray(surface[0], np.float64)
+        mesh = (vertices @ transform[:3, :3].T + transform[:3, 3],
+                np.asarray(surface[1], np.int64))
+        noise = surface_noise(mesh[0], points, nrm, tree, seed)
+        _step(report, "surface", len(vertices), len(vertices),
+              {"triangles": len(mesh[1]), "noise_m": round(noise, 5)}, t)
+    report.surface_noise = noise
     scene = Scene(points, nrm, step, str(geometry.source), sampled=False, captured=True,
-                  notes=list(geometry.notes), _tree=tree)
+                  notes=list(geometry.notes), _tree=tree, mesh=mesh, surface_noise=noise)
     return scene, report
+
+
+#: Vertices of a captured surface at most measured by :func:`surface_noise` (a seeded draw).
+NOISE_SAMPLES = 200_000
+
+
+def surface_noise(vertices: np.ndarray, points: np.ndarray, normals: np.ndarray, tree,
+                  seed: int = 0) -> float:
+    """How far (m) a captured surface's vertices stray from the surface its cleaned points
+    describe: each vertex's distance from its nearest point along that point's normal, and
+    of those distances three robust standard deviations (1.4826 x the median absolute
+    deviation), so that the few vertices nearest another surface (at a depth edge) do not
+    count. Deterministic: at most :data:`NOISE_SAMPLES` vertices, drawn with ``seed``."""
+    vertices = np.asarray(vertices, np.float64)
+    if len(vertices) > NOISE_SAMPLES:
+        pick = np.random.default_rng(seed).choice(len(vertices), NOISE_SAMPLES, replace=False)
+        vertices = vertices[np.sort(pick)]
+    if not len(vertices):
+        return 0.0
+    _, nearest = tree.query(vertices)
+    d = np.einsum("ij,ij->i", vertices - points[nearest], normals[nearest])
+    return float(3.0 * 1.4826 * np.median(np.abs(d - np.median(d))))
 
 
 def _step(report: RealSceneReport, name: str, before: int, after: int, params: dict, t0) -> None:
