@@ -319,6 +319,19 @@ def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
     assert ch3["precision"] == pytest.approx(1.0) and ch3["recall"] == pytest.approx(1.0)
     assert ch3["contact"][0] == "off" and ch3["interior_limit"] == 1.0
 
+    # a criterion's S_aff for the placement tests an affordance ships with (the gaussian
+    # criterion's, for captured scenes): the best F1 threshold once those tests are applied
+    from interaction_tensor.evaluation.tuning import shipped_thresholds
+    from interaction_tensor.examples.interactions import ACCEPTANCE
+
+    assert ACCEPTANCE["placing"]["clearance_limit"] == 0.05
+    rows4 = ([row(0.8, True)] * 6 + [row(0.62, True)] * 2 + [row(0.55, False)] * 5
+             + [row(0.95, False, touch=0.0)] * 5)   # lost its contact: the shipped test says no
+    best = shipped_thresholds(rows4)["placing"]
+    assert 0.55 < best["threshold"] <= 0.62
+    assert best["precision"] == pytest.approx(1.0) and best["recall"] == pytest.approx(1.0)
+    assert set(shipped_thresholds(rows4)) == {"placing"}
+
     # the tuning's record is written as one transaction and replaces an earlier one
     from interaction_tensor.evaluation.tuning import TuneResult, write
 

@@ -110,7 +110,7 @@ def cmd_tune(args) -> int:
         raise InputError("--top-candidates", "must be at least 1")
     st = TuneSettings(examples=_examples(args.examples), objects_dir=_objects_dir(args.objects),
                       seed=args.seed, objective=args.objective,
-                      top_candidates=args.top_candidates)
+                      top_candidates=args.top_candidates, criterion=args.criterion)
     log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
     res = tune(st, log)
     write(res, args.output)
@@ -182,6 +182,10 @@ def register(sub) -> None:
                         "decisions (f1, before 2026-11-26)")
     p.add_argument("--top-candidates", type=int, default=30,
                    help="placement tests of largest F1 tried by the top objective (30)")
+    p.add_argument("--criterion", choices=("paper", "gaussian"), default="paper",
+                   help="score criterion of the pairs: paper (mesh scenes) or gaussian (the "
+                        "default of captured scenes; tuning.md then gives its S_aff for the "
+                        "shipped placement tests)")
     seed_option(p)
     quiet_option(p)
     p.set_defaults(func=cmd_tune)

@@ -233,7 +233,8 @@ class InteractionTensor:
                        below_ground: float | str | None = None,
                        feet_reach: float | str | None = None,
                        straddle: dict | str | None = None,
-                       mount_height: float | str | None = None) -> None:
+                       mount_height: float | str | None = None,
+                       gaussian_threshold: float | None = None) -> None:
         """Accept placements scoring at least ``threshold`` (both keypoint sets, paper
         criterion), violating at most ``clearance_limit`` of the clearance points and
         ``interior_limit`` of the interior points, and keeping their contact (``contact`` =
@@ -246,10 +247,14 @@ class InteractionTensor:
         ``below_ground`` (m) sets the ground test (:attr:`below_ground`) and ``feet_reach``
         (m) the feet test (:attr:`feet_reach`), ``straddle`` (a dict of boxes) the straddle
         test (:attr:`straddle`) and ``mount_height`` (m) the mount test
-        (:attr:`mount_height`), ``"off"`` removes any of them. Arguments left None keep their
+        (:attr:`mount_height`), ``"off"`` removes any of them. ``gaussian_threshold`` sets the
+        threshold of the gaussian criterion (both keypoint sets; the default of captured
+        scenes; 0.5, the authors' code's, until set). Arguments left None keep their
         value."""
         if not 0 < threshold <= 1:
             raise ValueError("threshold must be in (0, 1]")
+        if gaussian_threshold is not None and not 0 < gaussian_threshold <= 1:
+            raise ValueError("gaussian_threshold must be in (0, 1]")
         for name, value in (("clearance_limit", clearance_limit),
                             ("interior_limit", interior_limit)):
             if value is not None and not 0 <= value <= 1:
@@ -275,6 +280,8 @@ class InteractionTensor:
                 collision_tests(collision)
         for which in ("weighted", "uniform"):
             self.thresholds[f"paper-{which}"] = float(threshold)
+            if gaussian_threshold is not None:
+                self.thresholds[f"gaussian-{which}"] = float(gaussian_threshold)
         if clearance_limit is not None:
             self.clearance_limit = float(clearance_limit)
         if interior_limit is not None:
@@ -334,6 +341,7 @@ class InteractionTensor:
         """What a placement must pass (the paper criterion's threshold and the placement
         tests), as stored in the descriptor."""
         return {"threshold": self.thresholds.get("paper-weighted"),
+                "gaussian_threshold": self.thresholds.get("gaussian-weighted"),
                 "clearance_limit": self.clearance_limit, "interior_limit": self.interior_limit,
                 "contact_groups": self.contact_groups,
                 "contact_distance": self.contact_distance,

@@ -389,28 +389,38 @@ def _rider_and_bike(rider: Geometry, seed: int):
 #: hanging, riding: tuned again with the tests not tuned there, the collision, through,
 #: ground, feet, straddle and mount tests, applied first, as detection does).
 ACCEPTANCE: dict = {
+    # gaussian_threshold: S_aff of the gaussian criterion (captured scenes' default), the
+    # threshold of largest F1 with these placement tests on the validation rooms' pairs
+    # scored with it (`itensor tune --criterion gaussian`, tuning.shipped_thresholds;
+    # docs/results/tuning-gaussian-2026-11-27/; riding's with its seat contact test off,
+    # which the tuning does not measure); the authors' code fixed 0.5 for every affordance.
     # precision and recall of the pair decisions on the validation pairs (tuning.md); the
     # collision tests [(depth, above)] of ranked placements, the through test, the ground
     # test, the feet test and the straddle test chosen on the judge's labelled set: every
     # valid pose kept, the most invalid ones rejected (scripts/choose_collision.py,
     # docs/results/collision/choice.md)
-    "placing": dict(threshold=0.03, clearance_limit=0.05, interior_limit=0.02,
+    "placing": dict(threshold=0.03, gaussian_threshold=0.13,
+                    clearance_limit=0.05, interior_limit=0.02,
                     contact=("main", 0.02, 0.9, 90.0),            # 99.2 %, 95.0 %
                     collision=[(0.01, None)], through=False),     # 30/76 invalid rejected
-    "sitting": dict(threshold=0.11, clearance_limit=0.10, interior_limit=0.02,
+    "sitting": dict(threshold=0.11, gaussian_threshold=0.17,
+                    clearance_limit=0.10, interior_limit=0.02,
                     contact=("main", 0.10, 0.75, 90.0),           # 91.5 %, 78.1 % (***)
                     collision=[(0.05, None), (0.01, -0.05)],      # 122/167: the whole body
                     through=False, below_ground=0.05,             # 5 cm, from 5 cm below the
                     feet_reach=0.25),                             # seat 1 cm; ground 126,
                                                                   # feet 154/167
-    "hanging": dict(threshold=0.03, clearance_limit=0.10, interior_limit=1.0,
+    "hanging": dict(threshold=0.03, gaussian_threshold=0.16,
+                    clearance_limit=0.10, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),             # 100 %, 4.3 % (**)
                     collision=[(0.01, None)], through=True,       # 110/125, with the
                     below_ground=0.01),                           # ground test 115/125
-    "filling": dict(threshold=0.575, clearance_limit=0.02, interior_limit=1.0,
+    "filling": dict(threshold=0.575, gaussian_threshold=0.675,
+                    clearance_limit=0.02, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),             # 100 %, 71.7 %
                     collision=[(0.01, None)], through=True),      # 12/72 (support under it)
-    "riding": dict(threshold=0.05, clearance_limit=0.20, interior_limit=1.0,
+    "riding": dict(threshold=0.05, gaussian_threshold=0.22,
+                   clearance_limit=0.20, interior_limit=1.0,
                    # tuned with contact off (83.5 %, 54.0 % (**)); the seat contact test
                    # chosen on the labelled set since (2 % of the seat region within 3 cm:
                    # 74/74 invalid rejected with everything below, 58 without it)
