@@ -13,6 +13,9 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from hypothesis.extra import numpy as hnp
 
 import interaction_tensor as it
 from interaction_tensor.errors import InputError
@@ -175,6 +178,43 @@ def test_depth_faces_join_neighbours_and_leave_steps_open(tmp_path):
     big = np.full((480, 640), 2.0)
     few = rd.depth_faces(big, max_faces=20_000)
     assert 0 < len(few) <= 20_000 and len(np.unique(few)) < 480 * 640 / 4
+
+
+@given(hnp.arrays(np.float64, st.tuples(st.integers(1, 12), st.integers(1, 12)),
+                  elements=st.sampled_from([0.0, 0.5, 0.505, 0.52, 1.0, 1.02, 3.0])),
+       st.integers(2, 400))
+def test_depth_faces_of_any_image_join_only_close_valid_neighbours(depth, max_faces):
+    from interaction_tensor.realdata import rgbd
+
+    faces = rd.depth_faces(depth, max_faces=max_faces)
+    valid = depth > 0
+    assert faces.dtype == np.int64 and faces.ndim == 2 and faces.shape[1] == 3
+    assert len(faces) <= max(max_faces, 0) or len(faces) == 0
+    if len(faces):
+        rows, cols = np.nonzero(valid)
+        assert faces.min() >= 0 and faces.max() < valid.sum()
+        z = depth[rows[faces], cols[faces]]
+        assert np.all(z > 0)
+        assert np.all(z.max(axis=1) - z.min(axis=1)
+                      <= rgbd.DEPTH_JUMP_ABS + rgbd.DEPTH_JUMP_REL * z.min(axis=1) + 1e-12)
+        # the three pixels of a triangle are corners of one square of the (strided) grid
+        assert np.all(np.ptp(rows[faces], axis=1) == np.ptp(cols[faces], axis=1))
+        assert len(np.unique(np.sort(faces, axis=1), axis=0)) == len(faces)
+
+
+def test_a_frame_whose_pixels_join_nothing_has_no_surface(tmp_path):
+    """Isolated depth pixels (a checkerboard of holes) make no triangle: the frame is a
+    cloud, and detection's collision test says it is off."""
+    depth = np.full((48, 64), 1500, np.uint16)
+    depth[::2, ::2] = depth[1::2, 1::2] = 0
+    from PIL import Image
+
+    Image.fromarray(depth).save(tmp_path / "d.png")
+    intr = _write_intrinsics(tmp_path / "i.json")
+    assert len(rd.depth_faces(rd.read_depth(tmp_path / "d.png", rd.load_intrinsics(intr)))) == 0
+    scene = it.load_scene(depth=str(tmp_path / "d.png"), intrinsics=str(intr), align=False,
+                          remove_outliers=False, voxel_size=0)
+    assert scene.mesh is None and scene.surface_noise == 0.0
 
 
 def test_frame_and_scan_keep_their_surface(tmp_path):
