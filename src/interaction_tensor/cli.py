@@ -327,9 +327,15 @@ def cmd_detect(args) -> int:
     t0 = time.perf_counter()
     result.save(outdir, descriptor_name=str(args.descriptor), render=args.render)
     if report is not None and report.alignment is not None:
-        _say(args, f"aligned: {report.alignment['kind']} plane at z = 0 (camera height "
-                   f"{report.alignment.get('camera_height_m', '-')} m); also wrote "
-                   "predictions_input_frame.json, heatmap_input_frame.ply, top_input_frame/")
+        height = report.alignment.get("camera_height_m")
+        camera = "" if height is None else f" (camera height {height} m)"
+        mesh = getattr(result.scene, "mesh", None)
+        surface = "" if mesh is None else (
+            f"; its surface: {len(mesh[1]):,} triangles, noise "
+            f"{1000 * getattr(result.scene, 'surface_noise', 0.0):.1f} mm")
+        _say(args, f"aligned: {report.alignment['kind']} plane at z = 0{camera}{surface}; "
+                   "also wrote predictions_input_frame.json, heatmap_input_frame.ply, "
+                   "top_input_frame/")
     _report(args, result, outdir)
     if args.render and not args.json:
         _say(args, f"wrote {outdir}/render.png (saving took {time.perf_counter() - t0:.1f} s)")
