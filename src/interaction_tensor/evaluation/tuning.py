@@ -304,7 +304,7 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
                 f"{kinds.get(SITE_OF[aff], 0)} {time.perf_counter() - t1:.0f} s")
     res.curves, res.chosen = choose(res.rows, res.runs)
     for aff, row in shipped_thresholds(res.rows).items():
-        res.chosen.setdefault(aff, {})["for_shipped_tests"] = row
+        res.chosen[aff]["for_shipped_tests"] = row
     verdicts = _TopJudge(models)
     if st.objective == "top":
         choose_by_tops(res, keep, verdicts, st, log)
@@ -532,8 +532,7 @@ def shipped_thresholds(rows: list) -> dict:
         rs = [r for r in rows if r["affordance"] == aff and r["weight"] > 0]
         if not rs:
             continue
-        contact = tuple(acc["contact"]) if len(acc["contact"]) == 4 else \
-            tuple(acc["contact"]) + (90.0,)
+        contact = tuple(acc["contact"])
         if contact[0] not in ("off", "main", "all"):
             # a contact mode the tuning does not measure (riding's seat test, chosen on the
             # labelled set): the threshold is chosen with the contact test off

@@ -278,15 +278,10 @@ def rgbd_to_geometry(color_path, depth_path, intrinsics, *,
         raise InputError(depth_path, f"no valid depth: {len(points)} pixels between 0 and "
                                      f"depth_trunc={intrinsics.depth_trunc} m "
                                      f"(depth_scale {intrinsics.depth_scale:g} units per metre)")
-    geometry = Geometry(points, faces_of(depth) if surface else None, None, colors,
-                        str(depth_path))
+    faces = depth_faces(depth) if surface else None
+    geometry = Geometry(points, faces if faces is not None and len(faces) else None, None,
+                        colors, str(depth_path))
     return validate_geometry(geometry, depth_path), np.zeros(3)
-
-
-def faces_of(depth: np.ndarray) -> np.ndarray | None:
-    """:func:`depth_faces`, or None when the frame joins no three pixels."""
-    faces = depth_faces(depth)
-    return faces if len(faces) else None
 
 
 def load_rgbd(color_path, depth_path, intrinsics_path, depth_scale=None, depth_trunc=None,
