@@ -322,7 +322,7 @@ def test_tum_sitting_finds_the_chair():
     best = result.predictions[0]
     assert 0.45 < best.position[2] < 0.6 and best.position[0] < -0.3     # the left chair
     # the feet over the floor (z = 0), within the feet test's reach: this chair's seat is
-    # 9 cm higher than the example's stool, so they hang about 11 cm above it
+    # 11 cm higher than the example's stool (0.425 m), so they hang about 11 cm above it
     lowest = (best.pose[:3, :3] @ tensor.query_vertices.T)[2].min() + best.pose[2, 3]
     assert 0.0 < lowest < tensor.feet_reach
     scene = result.scene
