@@ -13,10 +13,10 @@ DATA = Path(os.environ.get("ITENSOR_SHARED_DATA", HERE.parent.parent / "shared" 
 
 def protocol_descriptors(names=None, seed: int = 0) -> tuple[list, list]:
     """(names, descriptors) of the examples ``names`` (default: the protocol's 8)."""
-    from interaction_tensor.examples import interactions
+    from interaction_tensor import affordances
 
-    names = list(names or interactions.names())
-    return names, [interactions.build_descriptor(n, DATA / "objects", seed=seed, spacing=0.01)
+    names = list(names or affordances.example_names())
+    return names, [affordances.build_descriptor(n, DATA / "objects", seed=seed, spacing=0.01)
                    for n in names]
 
 

@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 import interaction_tensor as it
-from interaction_tensor.examples import interactions
-from interaction_tensor.io import load_geometry
+from interaction_tensor import affordances
+from interaction_tensor.geometry.load import load_geometry
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -30,8 +30,8 @@ def main() -> int:
     ap.add_argument("--scene", default="office-desk1")
     ap.add_argument("--data", default=str(ROOT.parent / "shared" / "data"))
     args = ap.parse_args()
-    det_mod = importlib.import_module("interaction_tensor.detect")
-    tensor = interactions.build_descriptor("sitting-human", Path(args.data) / "objects")
+    det_mod = importlib.import_module("interaction_tensor.detection.search")
+    tensor = affordances.build_descriptor("sitting-human", Path(args.data) / "objects")
     scene = it.prepare_scene(load_geometry(Path(args.data) / "scenes" / f"{args.scene}.ply"),
                              0.01, seed=0)
     floor = det_mod.CACHE_AUTO_FLOOR

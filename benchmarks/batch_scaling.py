@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 
 import interaction_tensor as it
-from interaction_tensor.examples import interactions
+from interaction_tensor import affordances
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENES = ("office-desk1", "office-desk5", "office-desk6", "living-room2", "living-room1",
@@ -46,7 +46,7 @@ def main() -> int:
     work = Path(tempfile.mkdtemp(prefix="itensor-batch-bench-"))
     descs = []
     for name in args.examples:
-        descs.append(interactions.build_descriptor(name, seed=0, spacing=0.01)
+        descs.append(affordances.build_descriptor(name, seed=0, spacing=0.01)
                      .save(work / f"{name}.npz"))
     scenes = [data / "scenes" / f"{s}.ply" for s in args.scenes]
     print(f"{len(scenes)} scenes x {len(descs)} descriptors, sample fraction "

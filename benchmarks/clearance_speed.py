@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 import interaction_tensor as it
-from interaction_tensor.clearance import clearance_offsets, count_violations
-from interaction_tensor.examples import interactions
+from interaction_tensor.placement.checks import clearance_offsets, count_violations
+from interaction_tensor import affordances
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -42,7 +42,7 @@ def main() -> int:
           "identical counts | placements violated |")
     print("|---|---:|---:|---:|---|---:|")
     for name in ("sitting-human", "placing-bowl", "hanging-hanger"):
-        tensor = interactions.build_descriptor(name, seed=0, spacing=0.01)
+        tensor = affordances.build_descriptor(name, seed=0, spacing=0.01)
         off = clearance_offsets(tensor, 8)
         r = tensor.clearance_radius
         count_violations(pts[:10], orient[:10], off, r, 0.005, scene, grid)

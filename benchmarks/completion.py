@@ -49,7 +49,7 @@ def same(a, b) -> bool:
 def clearance_counts(scene, tensor, det, settings) -> dict:
     """The clearance count of ``det``'s score-accepted pairs, timed: every clearance point
     against the count that stops at the first past the limit."""
-    from interaction_tensor.clearance import clearance_offsets, count_violations
+    from interaction_tensor.placement.checks import clearance_offsets, count_violations
 
     k = len(tensor.clearance_points)
     idx = np.flatnonzero(det.score_accepted)

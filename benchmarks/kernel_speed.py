@@ -8,12 +8,12 @@ Usage::
 
 Cases: kitchen5 with ``placing-bowl`` and living-room4 with ``sitting-human`` (descriptors
 fitted at 1 cm, scenes sampled at 1 cm, seed 0), test points drawn as
-:func:`interaction_tensor.detect.detect` draws them (``--fraction``, default 5 %), normal
+:func:`interaction_tensor.detection.search.detect` draws them (``--fraction``, default 5 %), normal
 filter applied, 8 orientations per candidate; ``--candidates`` keeps a seeded subset.
 
 Kernels, run interleaved (``--rounds`` rounds, Numba compiled beforehand):
 
-* ``reference``: :func:`interaction_tensor.kernels.score_jobs` without the cache (the grid
+* ``reference``: :func:`interaction_tensor.engine.numba_backend.score_jobs` without the cache (the grid
   shell search per keypoint, the kernel before the cache, bit for bit);
 * ``cache``: the same with ``cache=True``, from an empty cache each round ("cold", what one
   detection pays) and once more on the filled cache ("warm", what a second search of the
@@ -48,10 +48,10 @@ CASES = {"kitchen5": "placing-bowl", "living-room4": "sitting-human"}
 def build_case(scene_name: str, interaction: str, fraction: float, n_candidates: int, seed: int):
     """(scene, grid, tensor, candidate scene indices) of one case."""
     import interaction_tensor as it
-    from interaction_tensor.detect import _test_points, candidate_mask
-    from interaction_tensor.examples import interactions
+    from interaction_tensor.detection.search import _test_points, candidate_mask
+    from interaction_tensor import affordances
 
-    tensor = interactions.build_descriptor(interaction, objects_dir=DATA / "objects",
+    tensor = affordances.build_descriptor(interaction, objects_dir=DATA / "objects",
                                            spacing=0.01)
     scene = it.prepare_scene(it.load_geometry(DATA / "scenes" / f"{scene_name}.ply"), 0.01,
                              seed=0)
@@ -69,26 +69,26 @@ def build_case(scene_name: str, interaction: str, fraction: float, n_candidates:
 def make_job(scene, tensor, cand, criterion="paper", vectors=None, early_exit=True):
     """The ScoreJob of candidates ``cand`` x 8 orientations (points as coordinates)."""
     import interaction_tensor as it
-    from interaction_tensor.detect import keypoint_table, resolve_threshold
-    from interaction_tensor.kernels import ScoreJob
+    from interaction_tensor.detection.search import resolve_threshold
+    from interaction_tensor.engine.scoring import ScoreJob
 
     settings = it.DetectSettings(criterion=criterion, early_exit=early_exit)
     n_o = settings.n_orientations
     pp, po = np.repeat(cand, n_o), np.tile(np.arange(n_o), len(cand))
-    return ScoreJob(scene.points[pp], po, keypoint_table(tensor, settings),
+    return ScoreJob(scene.points[pp], po, tensor.keypoint_table(settings),
                     resolve_threshold(tensor, settings), vectors or tensor.vectors,
                     scene.spacing, early_exit)
 
 
 def run_reference(job, grid):
     """The grid search, no cache: (score, accepted, decided_at, comparisons)."""
-    from interaction_tensor import kernels
+    from interaction_tensor.engine import numba_backend as kernels
 
     return kernels.score_jobs([job], grid, cache=False)[0]
 
 
 def run_cache(job, grid, cold=True):
-    from interaction_tensor import kernels
+    from interaction_tensor.engine import numba_backend as kernels
 
     if cold:
         grid.cache = None

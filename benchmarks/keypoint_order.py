@@ -27,10 +27,10 @@ DATA = Path(os.environ.get("ITENSOR_SHARED_DATA",
 def compare(name: str, scene_name: str) -> float:
     """Both orders on one (example, scene); returns adaptive's speed-up over weight."""
     import interaction_tensor as it
-    from interaction_tensor.examples import interactions
+    from interaction_tensor import affordances
 
-    tensor = interactions.build_descriptor(name, seed=0, spacing=0.01,
-                                           example=interactions.build(name, DATA / "objects", 0))
+    tensor = affordances.build_descriptor(name, seed=0, spacing=0.01,
+                                           example=affordances.build(name, DATA / "objects", 0))
     scene = it.prepare_scene(it.load_geometry(DATA / "scenes" / f"{scene_name}.ply"), 0.01,
                              seed=0)
     scene.grid()

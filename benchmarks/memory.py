@@ -62,21 +62,21 @@ def main() -> int:
     ap.add_argument("--example", default="placing-bowl")
     ap.add_argument("--sample-fraction", type=float, default=0.3)
     args = ap.parse_args()
-    from interaction_tensor.io import write_ply_points
+    from interaction_tensor.geometry.files import write_ply_points
 
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        subprocess.run([sys.executable, "-m", "interaction_tensor.cli", "examples", "build",
+        subprocess.run([sys.executable, "-m", "interaction_tensor.cli.main", "examples", "build",
                         "-o", str(tmp / "ex"), "--examples", args.example, "-q"], check=True)
         base, _ = child_peak_mb([sys.executable, "-c",
-                                 "import interaction_tensor, interaction_tensor.cli; "
-                                 "from interaction_tensor import kernels; kernels._compile()"])
+                                 "import interaction_tensor, interaction_tensor.cli.main; "
+                                 "from interaction_tensor.engine import numba_backend as kernels; kernels._compile()"])
         for n in sorted(args.points):
             cloud = tmp / f"room{n}.ply"
             write_ply_points(cloud, room_cloud(n))
             peak, seconds = child_peak_mb(
-                [sys.executable, "-m", "interaction_tensor.cli", "detect", str(cloud),
+                [sys.executable, "-m", "interaction_tensor.cli.main", "detect", str(cloud),
                  str(tmp / "ex" / f"{args.example}.npz"), "-o", str(tmp / f"out{n}"), "-q",
                  "--sample-fraction", str(args.sample_fraction)])
             rows.append((n, peak, peak * 2 ** 20 / n, (peak - base) * 2 ** 20 / n, seconds))

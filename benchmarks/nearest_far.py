@@ -12,7 +12,7 @@ orientation at ``--points`` seeded random scene points, i.e. all the lookups an 
 score of those pairs makes. Prints the distribution of the queries' distance to the
 scene in grid cells (the shell search visits about (distance / cell)^3 cells; queries past
 ``kernels.FAR_CELLS`` search the occupied blocks instead), lookups per second of
-:func:`interaction_tensor.kernels.nearest_indices` (Numba, one thread) and of
+:func:`interaction_tensor.engine.numba_backend.nearest_indices` (Numba, one thread) and of
 ``cKDTree.query`` (one worker), their ratio per round (interleaved: only ratios mean much on
 a shared machine), and whether every answer is at the cKDTree's distance.
 """
@@ -44,12 +44,11 @@ def main(argv=None) -> int:
     from scipy.spatial import cKDTree
 
     import interaction_tensor as it
-    from interaction_tensor import kernels
-    from interaction_tensor.detect import keypoint_table
-    from interaction_tensor.examples import interactions
+    from interaction_tensor.engine import numba_backend as kernels
+    from interaction_tensor import affordances
 
     numba.set_num_threads(1)
-    tensors = {ex: interactions.build_descriptor(ex, objects_dir=DATA / "objects", spacing=0.01)
+    tensors = {ex: affordances.build_descriptor(ex, objects_dir=DATA / "objects", spacing=0.01)
                for ex in EXAMPLES}
     far = getattr(kernels, "FAR_CELLS", np.inf)          # inf: a version without the block search
     print(f"{kernels.__file__}: FAR_CELLS = {far}")
@@ -60,7 +59,7 @@ def main(argv=None) -> int:
         rng = np.random.default_rng(args.seed)
         tp = scene.points[rng.choice(len(scene), min(args.points, len(scene)), replace=False)]
         for ex, tensor in tensors.items():
-            table = keypoint_table(tensor, it.DetectSettings())
+            table = tensor.keypoint_table(it.DetectSettings())
             q = (tp[:, None, None, :] + table.offsets[None]).reshape(-1, 3)
             kernels.nearest_indices(grid, q[:16])                    # compile
             ratios, rates, exact = [], [], True

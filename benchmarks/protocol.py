@@ -35,14 +35,14 @@ def main() -> None:
     args = ap.parse_args()
 
     import interaction_tensor as it
-    from interaction_tensor.examples import interactions
+    from interaction_tensor import affordances
 
     files = (sorted((DATA / "scenes").glob("*.ply")) if args.scenes is None
              else [DATA / "scenes" / f"{s}.ply" for s in args.scenes])
     t0 = time.perf_counter()
-    names = interactions.names()
-    tensors = [interactions.build_descriptor(n, seed=args.seed, spacing=0.01,
-                                             example=interactions.build(n, DATA / "objects",
+    names = affordances.example_names()
+    tensors = [affordances.build_descriptor(n, seed=args.seed, spacing=0.01,
+                                             example=affordances.build(n, DATA / "objects",
                                                                         args.seed))
                for n in names]
     train_s = time.perf_counter() - t0

@@ -54,12 +54,12 @@ def _examples():
     q, s = _paper_bowl_tensor()
     out.append(("paper_bowl.ply on a table", q, s, it.TrainSettings()))
     try:
-        from interaction_tensor.examples import interactions
+        from interaction_tensor import affordances
     except ImportError:
         return out
-    for name in interactions.names():
-        ex = interactions.build(name)
-        out.append((name, ex.query, ex.scene_object, interactions.train_settings(name)))
+    for name in affordances.example_names():
+        ex = affordances.build(name)
+        out.append((name, ex.query, ex.scene_object, affordances.train_settings(name)))
     return out
 
 
@@ -94,9 +94,8 @@ def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
     order, the neighbour cache at 30 %), in the adaptive order, and through the grid search
     alone (weight order); then the exact reference on a candidate subset."""
     import interaction_tensor as it
-    from interaction_tensor.detect import keypoint_table
-    from interaction_tensor.scoring import score_pairs_exact
-    from interaction_tensor.kernels import score_pairs_numba
+    from interaction_tensor.engine.scoring import score_pairs_exact
+    from interaction_tensor.engine.numba_backend import score_pairs_numba
 
     bowl, tbl = _paper_bowl_tensor()
     tensor = it.InteractionTensor.fit(bowl, tbl, "placing-bowl", it.TrainSettings())
@@ -152,7 +151,7 @@ def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
                               replace=False))
     n_o = a.settings.n_orientations
     pp, po = np.repeat(cand, n_o), np.tile(np.arange(n_o), len(cand))
-    table = keypoint_table(tensor, a.settings)
+    table = tensor.keypoint_table(a.settings)
     _ = scene.tree          # the reference's index, built outside its timing like the grid
     t0 = time.perf_counter()
     ref = score_pairs_exact(scene.points[pp], po, table, scene, a.threshold, tensor.vectors)
@@ -167,8 +166,8 @@ def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
     s_c, acc_c, _, _ = score_pairs_numba(scene.points[pp], po, table, scene.grid(), a.threshold,
                                          tensor.vectors, scene.spacing, cache=True)
     scene.grid().cache = None
-    from interaction_tensor.detect import suppression_radius
-    from interaction_tensor.predictions import top_k
+    from interaction_tensor.detection.places import suppression_radius
+    from interaction_tensor.detection.places import top_k
 
     def top(score, accepted):
         idx = np.flatnonzero(accepted)
@@ -194,7 +193,7 @@ def case_big(n_points: int, fraction: float) -> dict:
     bowl, tbl = _paper_bowl_tensor()
     tensor = it.InteractionTensor.fit(bowl, tbl, "placing-bowl", it.TrainSettings())
     geometry = it.load_geometry(DATA / "scenes" / "kitchen5.ply")
-    from interaction_tensor.sampling import mesh_area
+    from interaction_tensor.geometry.sampling import mesh_area
     spacing = float(np.sqrt(mesh_area(geometry) / n_points))
     t0 = time.perf_counter()
     scene = it.prepare_scene(geometry, spacing, seed=0, max_points=n_points)
@@ -212,12 +211,12 @@ def case_sitting(scene_name: str, fraction: float, n_patch: int, rounds: int, fu
     the detection's test-point density), interleaved, outputs compared bit for bit; with
     ``full``, the whole detection at the defaults as well."""
     import interaction_tensor as it
-    from interaction_tensor import kernels
-    from interaction_tensor.detect import (_test_points, candidate_mask, keypoint_table,
+    from interaction_tensor.engine import numba_backend as kernels
+    from interaction_tensor.detection.search import (_test_points, candidate_mask,
                                            resolve_threshold)
-    from interaction_tensor.examples import interactions
+    from interaction_tensor import affordances
 
-    tensor = interactions.build_descriptor("sitting-human", objects_dir=DATA / "objects",
+    tensor = affordances.build_descriptor("sitting-human", objects_dir=DATA / "objects",
                                            spacing=0.01)
     scene = it.prepare_scene(it.load_geometry(DATA / "scenes" / f"{scene_name}.ply"), 0.01,
                              seed=0)
@@ -233,13 +232,13 @@ def case_sitting(scene_name: str, fraction: float, n_patch: int, rounds: int, fu
     n_o = st.n_orientations
     pp = np.repeat(patch, n_o)
     job = kernels.ScoreJob(scene.points[pp], np.tile(np.arange(n_o), len(patch)),
-                           keypoint_table(tensor, st), resolve_threshold(tensor, st),
+                           tensor.keypoint_table(st), resolve_threshold(tensor, st),
                            tensor.vectors, scene.spacing, True)
     kernels.score_jobs([kernels.ScoreJob(job.points[:64], job.orient[:64], job.table,
                                          job.threshold, job.vectors, job.rho)], grid, False)
     kernels.score_jobs([kernels.ScoreJob(job.points[:64], job.orient[:64], job.table,
                                          job.threshold, job.vectors, job.rho)], grid, True)
-    from interaction_tensor.detect import CACHE_AUTO_BYTES_PER_POINT, CACHE_AUTO_FLOOR
+    from interaction_tensor.engine.backends import CACHE_AUTO_BYTES_PER_POINT, CACHE_AUTO_FLOOR
 
     auto_budget = min(kernels.CACHE_BYTES,
                       max(CACHE_AUTO_FLOOR, CACHE_AUTO_BYTES_PER_POINT * len(scene)))
@@ -299,21 +298,21 @@ def _scaled_descriptors(count: int) -> list:
     """``count`` descriptors: the 8 examples, then the same examples scaled as a whole
     (query and scene-object about the query's base) by 0.8 ... 1.3."""
     import interaction_tensor as it
-    from interaction_tensor.examples import interactions
+    from interaction_tensor import affordances
 
     sizes = [1.0, 0.8, 0.85, 0.9, 0.95, 1.05, 1.1, 1.15, 1.2, 1.25, 1.3]
     tensors = []
     for size in sizes:
-        for name in interactions.names():
+        for name in affordances.example_names():
             if len(tensors) == count:
                 return tensors
-            ex = interactions.build(name)
+            ex = affordances.build(name)
             base = ex.query.vertices.min(axis=0)
             q = it.Geometry((ex.query.vertices - base) * size + base, ex.query.faces)
             s = it.Geometry((ex.scene_object.vertices - base) * size + base,
                             ex.scene_object.faces, ex.scene_object.normals)
             tensors.append(it.InteractionTensor.fit(q, s, f"{name}@{size}",
-                                                    interactions.train_settings(name)))
+                                                    affordances.train_settings(name)))
     return tensors
 
 
@@ -353,9 +352,8 @@ def case_many(scene_name: str, fraction: float, counts: list[int]) -> dict:
 def _keypoint_cells(tensor, settings, size: float) -> np.ndarray:
     """Distinct cells of edge ``size`` holding a keypoint of ``tensor`` in any orientation,
     keypoints placed relative to the test point; one int64 key per cell."""
-    from interaction_tensor.detect import keypoint_table
-
-    ijk = np.floor(keypoint_table(tensor, settings).offsets.reshape(-1, 3) / size).astype(np.int64)
+    
+    ijk = np.floor(tensor.keypoint_table(settings).offsets.reshape(-1, 3) / size).astype(np.int64)
     ijk += 1 << 20                                  # non-negative for any object under 10 km
     return np.unique((ijk[:, 0] << 42) | (ijk[:, 1] << 21) | ijk[:, 2])
 
@@ -409,7 +407,7 @@ def case_torch(scene_name: str, fraction: float) -> dict:
     import functools
 
     import interaction_tensor as it
-    from interaction_tensor.torch_backend import import_torch, resolve_device
+    from interaction_tensor.engine.torch_backend import import_torch, resolve_device
 
     torch = import_torch()
     device = resolve_device(None)
@@ -433,7 +431,7 @@ def case_torch(scene_name: str, fraction: float) -> dict:
                 "before": {"spatial_order": False}, "cdist": {"kernel": "cdist"},
                 "cdist_two_levels": {"kernel": "cdist", "levels": 2}}
     chosen = os.environ.get("ITENSOR_BENCH_VARIANTS", "torch,before").split(",")
-    from interaction_tensor import torch_backend
+    from interaction_tensor.engine import torch_backend
     index_cls, scorer = torch_backend.TorchIndex, torch_backend.score_pairs_torch
     made = {}
     out = {}

@@ -52,7 +52,7 @@ SETTINGS = {"reference": {"complete_scores": "accepted", "stage_order": "score-f
 def nearest_contacts(on: bool, scene):
     """With ``on``, the contact and seat tests find each point's nearest sample with the
     exact nearest-neighbour search (the code of 2026-11-27) instead of the bounded one."""
-    from interaction_tensor import clearance
+    from interaction_tensor.placement import checks as clearance
 
     saved = clearance._within
     if on:
@@ -66,7 +66,7 @@ def nearest_contacts(on: bool, scene):
 
 def same(ref, b) -> bool:
     """Whether a detection gives the reference's results."""
-    from interaction_tensor.clearance import UNTESTED
+    from interaction_tensor.placement.checks import UNTESTED
 
     acc = ref.pairs.accepted
     tested = ref.placement != UNTESTED

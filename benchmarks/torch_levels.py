@@ -26,7 +26,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import run as B  # noqa: E402
 
 import interaction_tensor as it  # noqa: E402
-from interaction_tensor import torch_backend as TB  # noqa: E402
+from interaction_tensor.engine import torch_backend as TB  # noqa: E402
 
 #: (levels, coarsening, pairs per block) tried, in order
 RUNS = ((2, 4.0, 2048), (2, 4.0, 8192), (2, 4.0, 32768), (3, 2.0, 8192), (3, 4.0, 8192))

@@ -16,10 +16,10 @@ import pytest
 
 import interaction_tensor as it
 from interaction_tensor.batch import batch, expand_paths, unique_names
-from interaction_tensor.cli import main
+from interaction_tensor.cli.main import main
 from interaction_tensor.examples import demo
 from interaction_tensor.examples.procedural import box_part, parts_mesh
-from interaction_tensor.io import write_mesh
+from interaction_tensor.geometry.files import write_mesh
 
 HEIGHTS = (0.55, 0.7, 0.85, 1.0)
 FAST = ["--sample-fraction", "0.1", "--top-k", "3"]
@@ -156,7 +156,7 @@ def dask_cluster(tmp_path):
 def test_batch_on_a_dask_scheduler_survives_a_killed_worker(data, tmp_path, dask_cluster):
     address, workers = dask_cluster
     out = tmp_path / "out"
-    argv = ["interaction_tensor.cli", "batch", "--scenes", str(data / "room*.ply"),
+    argv = ["interaction_tensor.cli.main", "batch", "--scenes", str(data / "room*.ply"),
             "--descriptors", str(data / "bowl.npz"), str(data / "loose.npz"), "-o", str(out),
             "--scheduler", address, "--no-render", "--quiet", "--json", *FAST]
     run = subprocess.Popen([sys.executable, "-m", *argv], stdout=subprocess.PIPE,

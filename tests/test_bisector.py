@@ -1,6 +1,6 @@
 import numpy as np
 
-from interaction_tensor.bisector import (bisector_points, bisector_points_voronoi,
+from interaction_tensor.descriptor.bisector import (bisector_points, bisector_points_voronoi,
                                          circumcentres, trim_to_sphere)
 
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from interaction_tensor.clearance import clearance_offsets, count_violations, violations, \
+from interaction_tensor.placement.checks import clearance_offsets, count_violations, violations, \
     nearest_distance_function
-from interaction_tensor.kernels import available
+from interaction_tensor.engine.numba_backend import available
 
 pytestmark = pytest.mark.skipif(not available(), reason="needs Numba")
 
@@ -22,7 +22,7 @@ class _Scene:
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_kernel_equals_reference_on_clutter(seed):
-    from interaction_tensor.kernels import build_grid
+    from interaction_tensor.geometry.grid import build_grid
 
     rng = np.random.default_rng(seed)
     # a floor, a box top and scattered clutter, 1 cm-ish spacing
@@ -53,10 +53,10 @@ def test_kernel_equals_reference_on_clutter(seed):
 def test_kernel_equals_reference_on_a_descriptor():
     """The placing example's own clearance points over a procedural room."""
     import interaction_tensor as it
-    from interaction_tensor.examples import interactions
+    from interaction_tensor import affordances
 
-    tensor = interactions.build_descriptor("placing-bowl", seed=0, spacing=0.02)
-    room = it.prepare_scene(interactions.build("placing-bowl").scene_object, 0.01, seed=0)
+    tensor = affordances.build_descriptor("placing-bowl", seed=0, spacing=0.02)
+    room = it.prepare_scene(affordances.build("placing-bowl").scene_object, 0.01, seed=0)
     rng = np.random.default_rng(0)
     idx = rng.integers(0, len(room.points), 4000)
     orient = rng.integers(0, 8, len(idx))
@@ -74,8 +74,8 @@ def test_bounded_nearest_answers_within_as_the_exact_nearest(seed):
     """``d <= r`` of the bounded search equals that of the exact nearest distance for every
     r in [lo, hi], on clutter, for queries at surfaces, in the air, outside the grid and on
     the samples themselves (distance 0)."""
-    from interaction_tensor._numba_clearance import nearest_within
-    from interaction_tensor.kernels import build_grid
+    from interaction_tensor.placement._kernels import nearest_within
+    from interaction_tensor.geometry.grid import build_grid
     from scipy.spatial import cKDTree
 
     rng = np.random.default_rng(seed)
@@ -104,21 +104,21 @@ def test_contact_and_seat_fractions_on_the_grid_equal_the_reference():
     those of the cKDTree's nearest samples, for the sitting and riding examples' pairs in a
     procedural room (touching, near and in the air)."""
     import interaction_tensor as it
-    from interaction_tensor.clearance import contact_fractions, seat_fractions
-    from interaction_tensor.examples import interactions
+    from interaction_tensor.placement.checks import contact_fractions, seat_fractions
+    from interaction_tensor import affordances
 
-    room = it.prepare_scene(interactions.build("sitting-human").scene_object, 0.01, seed=0)
+    room = it.prepare_scene(affordances.build("sitting-human").scene_object, 0.01, seed=0)
     rng = np.random.default_rng(3)
     idx = rng.integers(0, len(room.points), 3000)
     pts = room.points[idx] + rng.normal(0, 0.05, (3000, 3)) * (rng.random((3000, 1)) < 0.5)
     orient = rng.integers(0, 8, len(idx))
-    sit = interactions.build_descriptor("sitting-human", seed=0, spacing=0.02)
+    sit = affordances.build_descriptor("sitting-human", seed=0, spacing=0.02)
     tests = [(0.02, 90.0), (0.1, 90.0), (0.05, 90.0)]
     ref = contact_fractions(pts, orient, sit, tests, 8, room, None)
     fast = contact_fractions(pts, orient, sit, tests, 8, room, room.grid())
     assert 0 < ref[:, :, 0].mean() < 1
     np.testing.assert_array_equal(fast, ref)
-    ride = interactions.build_descriptor("riding-human", seed=0, spacing=0.02)
+    ride = affordances.build_descriptor("riding-human", seed=0, spacing=0.02)
     ref = seat_fractions(pts, orient, ride, 0.03, 8, room, None)
     fast = seat_fractions(pts, orient, ride, 0.03, 8, room, room.grid())
     assert (ref > 0).any() and (ref < 1).any()

@@ -11,15 +11,15 @@ import pytest
 
 import interaction_tensor as it
 
-from interaction_tensor.io import write_mesh, write_ply_points
+from interaction_tensor.geometry.files import write_mesh, write_ply_points
 
-from conftest import corner_example
+from support import corner_example
 
 ITENSOR = shutil.which("itensor") or None
 
 
 def run(*args, check=None):
-    cmd = [ITENSOR] if ITENSOR else [sys.executable, "-m", "interaction_tensor.cli"]
+    cmd = [ITENSOR] if ITENSOR else [sys.executable, "-m", "interaction_tensor.cli.main"]
     proc = subprocess.run(cmd + [str(a) for a in args], capture_output=True, text=True,
                           timeout=600, env={**os.environ, "PYTHONWARNINGS": "ignore"})
     if check is not None:
@@ -122,7 +122,7 @@ def test_usage_errors_exit_non_zero():
 
 
 def test_detect_on_an_rgbd_frame_directory(files, descriptor, tmp_path):
-    from conftest import shared_file
+    from support import shared_file
     frame = shared_file("rgbd/tum_desk/intrinsics.json").parent
     out = tmp_path / "tum"
     proc = run("detect", frame, descriptor, "-o", out, "--sample-fraction", 0.05,
@@ -142,7 +142,7 @@ def test_detect_on_an_rgbd_frame_directory(files, descriptor, tmp_path):
 def _all_actions():
     import argparse
 
-    from interaction_tensor.cli import build_parser
+    from interaction_tensor.cli.main import build_parser
 
     def walk(parser, name):
         for a in parser._actions:
@@ -167,9 +167,9 @@ def test_every_option_has_help_and_shows_its_default():
 
 
 def test_detect_json_summary_and_unwritable_outputs(tmp_path, capsys):
-    from interaction_tensor.cli import main
+    from interaction_tensor.cli.main import main
 
-    from conftest import corner_example
+    from support import corner_example
 
     query, scene_object = corner_example()
     write_mesh(tmp_path / "q.ply", query.vertices, query.faces)
@@ -185,21 +185,14 @@ def test_detect_json_summary_and_unwritable_outputs(tmp_path, capsys):
     summary = json.loads(out[0])
     assert summary["pairs_scored"] > 0 and summary["output"] == str(tmp_path / "out")
     assert len(summary["predictions"]) >= 1
-    assert summary["stage_order"] == "tests-first"
     assert summary["pairs_tested"] == summary["pairs"] >= summary["pairs_scored"]
-    # the other order: the same predictions, every pair scored
-    assert main(["detect", str(tmp_path / "s.ply"), str(tmp_path / "c.npz"), "-o",
-                 str(tmp_path / "out2"), "--json", "--sample-fraction", "0.2",
-                 "--stage-order", "score-first"]) == 0
-    other = json.loads(capsys.readouterr().out.strip().splitlines()[0])
-    assert other["stage_order"] == "score-first" and other["pairs_scored"] == other["pairs"]
-    assert other["predictions"] == summary["predictions"]
-    # a contradiction is one line and status 2
-    assert main(["detect", str(tmp_path / "s.ply"), str(tmp_path / "c.npz"), "-o",
-                 str(tmp_path / "out3"), "--stage-order", "tests-first",
-                 "--complete-scores", "accepted"]) == 2
+    # an unknown placement test is one line and status 2
+    with pytest.raises(SystemExit) as exc:
+        main(["detect", str(tmp_path / "s.ply"), str(tmp_path / "c.npz"), "-o",
+              str(tmp_path / "out3"), "--skip-test", "clearence"])
+    assert exc.value.code == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "tests-first" in err and "Traceback" not in err
+    assert "unknown placement test clearence" in err and "Traceback" not in err
     # unwritable outputs: one line naming the path, status 2, no traceback
     (tmp_path / "file").write_text("x")
     for target in (str(tmp_path / "file" / "c.npz"), str(tmp_path / "out"), ""):
@@ -216,13 +209,13 @@ def test_a_closed_pipe_ends_quietly(tmp_path):
     import subprocess
     import sys
 
-    from conftest import corner_example
+    from support import corner_example
 
     query, scene_object = corner_example()
     t = it.InteractionTensor.fit(query, scene_object, "corner", it.TrainSettings(query_points=500))
     t.save(tmp_path / "c.npz")
     # the reader closes its end before itensor writes a byte: EPIPE on the first write
-    run = subprocess.Popen([sys.executable, "-m", "interaction_tensor.cli", "info", "--json",
+    run = subprocess.Popen([sys.executable, "-m", "interaction_tensor.cli.main", "info", "--json",
                             str(tmp_path / "c.npz")], stdout=subprocess.PIPE,
                            stderr=subprocess.PIPE, text=True)
     run.stdout.close()

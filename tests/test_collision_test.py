@@ -17,27 +17,29 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import interaction_tensor as it
-from interaction_tensor.clearance import FAILS_COLLISION
-from interaction_tensor import collision
-from interaction_tensor.collision import Body, MeshCollider
-from interaction_tensor.collision import polygon as collision_polygon
-from interaction_tensor.detect import CollisionCheck, rank_pairs, suppression_radius
+from interaction_tensor.detection.search import Engine, detect
+from interaction_tensor.placement.checks import FAILS_COLLISION
+from interaction_tensor.geometry import collision
+from interaction_tensor.geometry.collision import Body, MeshCollider
+from interaction_tensor.geometry.collision import polygon as collision_polygon
+from interaction_tensor.detection.ranking import CollisionCheck, rank_pairs
+from interaction_tensor.detection.places import suppression_radius
 from interaction_tensor.errors import InputError
-from interaction_tensor.examples import interactions
+from interaction_tensor import affordances
 from interaction_tensor.examples.procedural import box_part, parts_mesh
-from interaction_tensor.predictions import top_k
+from interaction_tensor.detection.places import top_k
 
-from conftest import descriptor_with_header
+from support import descriptor_with_header
 
 #: every pair accepted by score and the sampled placement tests off: only collision decides
-OPEN = dict(threshold=1e-3, clearance=False, contact=False, interior=False, ground=False,
+OPEN = dict(threshold=1e-3, skip_tests=("clearance", "contact", "interior", "ground"),
             top_k=3)
 
 
 @pytest.fixture(scope="module")
 def hanging():
-    ex = interactions.build("hanging-hanger")
-    return ex, interactions.build_descriptor("hanging-hanger", example=ex)
+    ex = affordances.build("hanging-hanger")
+    return ex, affordances.build_descriptor("hanging-hanger", example=ex)
 
 
 def _desk():
@@ -50,19 +52,10 @@ def _desk():
     return scene, top
 
 
-def test_the_tuned_examples_carry_the_collision_test_chosen_on_the_labelled_set(hanging):
-    _, tensor = hanging
-    assert tensor.collision_tests == ((0.01, None),) and tensor.through
-    riding = interactions.acceptance("riding")
-    assert riding["collision"] == [(0.01, 0.05)] and not riding["through"]  # legs hang free
-    (body, depth), = tensor.collision_bodies()
-    assert len(body) == len(tensor.query_faces) and depth == 0.01
-
-
 def test_a_hanger_through_a_desk_top_is_never_predicted(hanging):
     _, tensor = hanging
     scene, top = _desk()
-    loose = it.detect(scene, tensor, it.DetectSettings(collision=False, **OPEN),
+    loose = it.detect(scene, tensor, it.DetectSettings(**{**OPEN, "skip_tests": OPEN["skip_tests"] + ("collision",)}),
                       test_indices=top)
     assert len(loose.predictions) >= 2          # without the test: through the desk top
     assert loose.stats["collision_test"] == "off (settings)"
@@ -102,8 +95,8 @@ def test_a_hanger_on_its_rail_is_kept(hanging):
 def test_the_tests_allowed_are_bounded_and_an_untested_placement_is_not_predicted(hanging):
     _, tensor = hanging
     scene, top = _desk()
-    det = it.detect(scene, tensor, it.DetectSettings(collision_max_tests=7, **OPEN),
-                    test_indices=top)
+    det = detect(it.load_scene(scene), tensor, it.DetectSettings(**OPEN), test_indices=top,
+                 engine=Engine(collision_max_tests=7))
     assert det.stats["collision_tests"] == 7 and det.stats["collision_tests_exhausted"]
     assert det.predictions == []
 
@@ -116,7 +109,7 @@ def test_point_clouds_and_descriptors_without_a_depth_skip_the_test(hanging):
     assert det.stats["collision_test"] == det.stats["through_test"] == \
         "off (the scene has no triangles)"
     assert len(det.predictions) >= 2
-    bare = interactions.build_descriptor("hanging-hanger", tuned=False)
+    bare = affordances.build_descriptor("hanging-hanger", tuned=False)
     assert bare.collision_tests == () and bare.collision_bodies() == []
     assert not bare.through and bare.through_body() is None
     assert CollisionCheck(it.detect(scene, bare, it.DetectSettings(**OPEN),
@@ -129,7 +122,7 @@ def test_a_captured_surface_s_noise_is_allowed_on_top_of_the_depth():
     top fails placing's 1 cm test, and passes it on a surface with 5 mm of noise."""
     import dataclasses
 
-    bowl = interactions.build_descriptor("placing-bowl")
+    bowl = affordances.build_descriptor("placing-bowl")
     assert bowl.collision_tests == ((0.01, None),)
     scene, top = _desk()
     vertices, faces = scene.mesh
@@ -154,7 +147,7 @@ def test_the_collision_setting_survives_a_file_and_a_bad_one_is_refused(hanging,
         assert len(hook) < len(whole) == len(back.query_faces) and (d1, d2) == (0.03, 0.05)
         np.testing.assert_array_equal(back.through_section, tensor.through_section)
     finally:
-        tensor.set_acceptance(tensor.threshold(), **{k: interactions.acceptance("hanging")[k]
+        tensor.set_acceptance(tensor.threshold(), **{k: affordances.acceptance("hanging")[k]
                                                      for k in ("collision", "through")})
     tensor.set_acceptance(tensor.threshold(), collision="off")
     try:
@@ -218,8 +211,8 @@ def test_a_hook_pushed_up_into_a_board_underside_has_nothing_through_it(hanging)
     the board, the hanger hanging free below: scans' wall cabinets and seat undersides) only
     grazes the opening: neither the exact nor the sampled through test passes it, while the
     rail still passes both. Without the section's top band, both passed it."""
-    from interaction_tensor.clearance import through_crossed_poses
-    from interaction_tensor.descriptor import through_section_of
+    from interaction_tensor.placement.checks import through_crossed_poses
+    from interaction_tensor.descriptor.tensor import through_section_of
 
     ex, tensor = hanging
     apex = float(ex.support_point[2])
@@ -234,7 +227,7 @@ def test_a_hook_pushed_up_into_a_board_underside_has_nothing_through_it(hanging)
         tensor.through_body(), at[0])
     # the same section without its top band: the board crosses it
     full = through_section_of(ex.query, ex.scene_object,
-                              interactions.train_settings("hanging-hanger", 0.01, 0), band=0.0)
+                              affordances.train_settings("hanging-hanger", 0.01, 0), band=0.0)
     assert full[:, 2].max() > tensor.through_section[:, 2].max() + 0.002
     assert MeshCollider(board.vertices, board.faces).collides(Body(*collision_polygon(full)),
                                                               at[0])
@@ -264,7 +257,7 @@ def test_suppression_with_a_test_picks_as_suppression_over_what_passes(seed, k, 
 
 
 def test_the_through_section_is_empty_where_nothing_passes_through_the_query():
-    from interaction_tensor.collision import through_section
+    from interaction_tensor.geometry.collision import through_section
 
     rng = np.random.default_rng(3)
     ball = rng.normal(size=(400, 3))
@@ -316,7 +309,7 @@ def test_a_hanger_hooked_below_the_floor_line_fails_the_ground_test(hanging):
     and a high rail. A hanger hooked on the low bar reaches below that lowest point and fails
     the ground test (the judge's hook round a chair's star base); on the high rail it passes;
     with the test off the low bar passes too."""
-    from interaction_tensor.clearance import FAILS_GROUND, below_ground, check_placements
+    from interaction_tensor.placement.checks import FAILS_GROUND, below_ground, check_placements
 
     ex, tensor = hanging
     drop = float(tensor.reference_point[2] - tensor.query_vertices[:, 2].min())
@@ -329,11 +322,11 @@ def test_a_hanger_hooked_below_the_floor_line_fails_the_ground_test(hanging):
     high = np.array([[0.0, 0.9, 1.615]])
     assert below_ground(low, tensor, scene)[0] == pytest.approx(drop - 0.095, abs=1e-9)
     assert below_ground(high, tensor, scene)[0] < -1.0
-    settings = it.DetectSettings(clearance=False, contact=False, interior=False)
+    settings = it.DetectSettings(skip_tests=("clearance", "contact", "interior"))
     orient = np.zeros(2, np.int64)
     _, outcome = check_placements(np.vstack([low, high]), orient, tensor, settings, scene)
     assert outcome.tolist() == [FAILS_GROUND, 0]
-    off = it.DetectSettings(clearance=False, contact=False, interior=False, ground=False)
+    off = it.DetectSettings(skip_tests=("clearance", "contact", "interior", "ground"))
     assert check_placements(np.vstack([low, high]), orient, tensor, off, scene)[1].tolist() \
         == [0, 0]
     tensor.set_acceptance(tensor.threshold(), below_ground="off")
@@ -363,43 +356,6 @@ def test_the_ground_setting_survives_a_file_and_a_bad_one_is_refused(hanging, tm
     assert it.InteractionTensor.load(old).below_ground is None
 
 
-def test_the_tunings_top_ranks_untested_placements_as_the_evaluation_does(hanging):
-    """With the tests allowed spent part way, the tuning's top k (``table_top``) over the
-    full scores picks what the evaluation's ranking of a fresh detection picks with the same
-    allowance: a placement it could not test ranks with the pairs that fail a test, not
-    above them nor out. The tuning's candidates share one check's verdicts, each ranked
-    with an allowance of its own (``RankingCheck``)."""
-    from interaction_tensor.detect import full_scores
-    from interaction_tensor.evaluation.tuning import RankingCheck, table_top
-
-    ex, tensor = hanging
-    scene = it.prepare_scene(ex.scene_object, 0.01, seed=0)
-    d = np.linalg.norm(scene.points - ex.support_point, axis=1)
-    test = np.r_[np.argsort(d)[:6], np.flatnonzero(d > 0.3)[::97]]
-
-    def fresh(budget):
-        return it.detect(scene, tensor, it.DetectSettings(
-            **{**OPEN, "top_k": 0}, collision_max_tests=budget), test_indices=test)
-
-    base = fresh(10 ** 6)
-    full, placed = full_scores(base, np.arange(len(base.pair_point)))
-    position = scene.points[base.pair_point]
-    radius = suppression_radius(tensor, base.settings)
-    shared = CollisionCheck(base)
-    untested_placed = 0
-    for budget in (0, 1, 2, 3, 6, 12, 1000):
-        det = fresh(budget)
-        idx, _, _ = rank_pairs(det, 4, radius)
-        check = det.collisions
-        assert check.tests <= budget
-        assert table_top(position, full, placed, 4, radius, check).tolist() == idx.tolist()
-        view = RankingCheck(shared, budget)
-        assert table_top(position, full, placed, 4, radius, view).tolist() == idx.tolist()
-        assert view.n_asked == check.tests and view.exhausted == check.exhausted
-        untested_placed += int((placed[idx] & (check.state[idx] < 0)).sum())
-    assert untested_placed > 0            # the case in question happened
-
-
 def test_part_above_cuts_long_triangles_so_a_part_keeps_what_lies_above():
     # one triangle from z = 0 to z = 1: no vertex set lies wholly above 0.5, its cut
     # pieces above 0.5 do
@@ -418,7 +374,7 @@ def test_part_above_cuts_only_the_crossing_triangles_and_keeps_the_same_surface(
     of them keeps (a triangle is cut on its own edges), with fewer triangles."""
     import trimesh
 
-    q = interactions.build("sitting-human").query
+    q = affordances.build("sitting-human").query
     z = 0.40
     v, f = trimesh.remesh.subdivide_to_size(q.vertices, q.faces, max_edge=collision.PART_EDGE,
                                             max_iter=12)
@@ -429,29 +385,3 @@ def test_part_above_cuts_only_the_crossing_triangles_and_keeps_the_same_surface(
     assert len(pf) < len(f) and (pv[pf][:, :, 2] > z).all()
 
 
-@pytest.mark.parametrize("behind, free", [(-0.01, True), (0.03, False)])
-def test_sitting_collision_test_rejects_knees_through_a_seats_front_edge(behind, free):
-    """Sitting's core test (the person from 5 cm below the seat up, 1 cm): sat with the
-    calves 1 cm past a 3 cm seat top's front edge it passes; moved back until they are 3 cm
-    behind it, the tops of the shins cross the top at the knees and it fails (the published
-    scenes' counters and TV units, sat on at their edge), though a 5 cm move frees the whole
-    body (sitting's other test) and no uncut triangle of the shins lies above the band."""
-    from interaction_tensor.evaluation.labelled import seated_reach, site_pose
-
-    ex = interactions.build("sitting-human")
-    whole, (depth, above) = interactions.acceptance("sitting")["collision"]
-    assert whole == (0.05, None)
-    _, calves = seated_reach(ex)
-    seat = 0.45
-    edge = calves + behind                         # the front edge, ahead of the seat point
-    scene = parts_mesh([box_part("seat", (edge - 0.3, 0.0, seat - 0.015), (0.6, 0.8, 0.03))])
-    collider = MeshCollider(scene.vertices, scene.faces)
-    pose = site_pose(ex, (0.0, 0.0, seat), 0.0)
-    v, f = ex.query.vertices, ex.query.faces
-    z = ex.support_point[2] + above
-    part = Body(*collision.part_above(v, f, z))
-    assert (collider.separation(part, pose, limit=depth) <= depth) == free
-    if not free:
-        assert collider.separation(Body(v, f), pose, limit=0.05) <= 0.05
-        uncut = f[(v[:, 2] > z)[f].all(axis=1)]
-        assert collider.separation(Body(v, uncut), pose, limit=depth) <= depth

@@ -5,7 +5,7 @@ import json
 import numpy as np
 
 from interaction_tensor.examples import demo
-from interaction_tensor.io import load_geometry
+from interaction_tensor.geometry.load import load_geometry
 
 
 def test_demo_writes_its_outputs(demo_run):

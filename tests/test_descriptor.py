@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
-from interaction_tensor.sampling import (mean_spacing, uniform_keypoints, unique_rows,
+from interaction_tensor.geometry.sampling import (mean_spacing, uniform_keypoints, unique_rows,
                                          weighted_keypoints)
 
-from conftest import plane
+from support import plane
 
 
 @pytest.fixture(scope="module")
@@ -79,7 +79,7 @@ def test_uniform_sampling_covers_without_repeats():
 
 
 def test_fit_is_deterministic_for_a_seed(corner_tensor):
-    from conftest import corner_example
+    from support import corner_example
     q, s = corner_example()
     again = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1))
     np.testing.assert_array_equal(again.weighted.points, corner_tensor.weighted.points)
@@ -146,7 +146,7 @@ def test_example_scores_high_at_its_own_pose(corner_tensor):
     # scored at exactly the reference point on a re-sampled scene-object, the example
     # matches itself; at sampled points a few millimetres off, contacts with the walls
     # loosen, which is what the calibrated threshold accounts for
-    from conftest import corner_example
+    from support import corner_example
     _, s = corner_example()
     scene = it.prepare_scene(s, corner_tensor.scene_spacing, seed=11)
     at_ref = it.score_at(corner_tensor, scene, corner_tensor.reference_point[None], [0])

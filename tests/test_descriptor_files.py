@@ -12,9 +12,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import interaction_tensor as it
-from interaction_tensor.descriptor import _ARRAYS
+from interaction_tensor.descriptor.tensor import _ARRAYS
 
-from conftest import corner_example
+from support import corner_example
 
 
 @pytest.fixture(scope="module")
@@ -190,11 +190,11 @@ def test_a_height_setting_survives_a_file_and_a_bad_one_is_refused(
     or of the wrong type refused when set and when read from a file; absent from an older
     file, the test is off."""
     from interaction_tensor.errors import InputError
-    from interaction_tensor.examples import interactions
+    from interaction_tensor import affordances
 
-    from conftest import descriptor_with_header
+    from support import descriptor_with_header
 
-    tensor = interactions.build_descriptor(example)
+    tensor = affordances.build_descriptor(example)
     assert tensor.acceptance()[field] == default
     tensor.set_acceptance(tensor.threshold(), **{field: good})
     saved = tensor.save(tmp_path / "d.npz")
@@ -211,4 +211,4 @@ def test_a_height_setting_survives_a_file_and_a_bad_one_is_refused(
     old = descriptor_with_header(saved, tmp_path / "old.npz", drop=field)
     assert getattr(it.InteractionTensor.load(old), field) is None
     other = "riding-human" if example == "sitting-human" else "sitting-human"
-    assert getattr(interactions.build_descriptor(other), field) is None
+    assert getattr(affordances.build_descriptor(other), field) is None

@@ -2,16 +2,15 @@ import os
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 
 import interaction_tensor as it
-from interaction_tensor.detect import candidate_mask, keypoint_table
+from interaction_tensor.detection.search import Engine, candidate_mask, detect
 from interaction_tensor.examples.procedural import box_part, parts_mesh
-from interaction_tensor.kernels import build_grid, nearest_indices
-from interaction_tensor.scoring import score_pairs, score_pairs_exact
+from interaction_tensor.geometry.grid import build_grid
+from interaction_tensor.engine.numba_backend import nearest_indices
+from interaction_tensor.engine.scoring import score_pairs, score_pairs_exact
 
-from conftest import corner_example
+from support import corner_example
 
 
 def moved_corner_scene(angle, shift):
@@ -65,14 +64,14 @@ def test_candidates_without_scoring_are_detections_candidates(corner_tensor):
     the same seeded draw and normal filter as a detection, for either N_aff."""
     from dataclasses import replace
 
-    from interaction_tensor.detect import candidates
+    from interaction_tensor.detection.search import candidates
 
     scene_geometry, _ = moved_corner_scene(0.3, np.array([0.0, 0.0, 0.0]))
     scene = it.prepare_scene(scene_geometry, 0.01, seed=5)
     down = replace(corner_tensor, affordance_normal=-np.asarray(corner_tensor.affordance_normal))
     for tensor in (corner_tensor, down):
         for frac, seed in ((0.1, 9), (0.5, 2)):
-            s = it.DetectSettings(sample_fraction=frac, seed=seed, top_k=0)
+            s = it.DetectSettings(sample_fraction=frac, seed=seed)
             c = candidates(scene, tensor, s)
             np.testing.assert_array_equal(c, it.detect(scene, tensor, s).candidate_indices)
             assert 0 < len(c) < frac * len(scene) + 1
@@ -96,7 +95,7 @@ def test_early_exit_and_numba_decide_like_the_exact_reference(corner_tensor, sco
                                                              criterion, keypoints):
     scene, pp, po = scored_setup
     settings = it.DetectSettings(criterion=criterion, keypoints=keypoints)
-    table = keypoint_table(corner_tensor, settings)
+    table = corner_tensor.keypoint_table(settings)
     thr = corner_tensor.threshold(criterion, keypoints)
     ref = score_pairs_exact(scene.points[pp], po, table, scene, thr)
     assert 0 < ref.accepted.sum() < len(pp)           # a real mix of decisions
@@ -105,7 +104,7 @@ def test_early_exit_and_numba_decide_like_the_exact_reference(corner_tensor, sco
     np.testing.assert_allclose(fast.score[ref.accepted], ref.score[ref.accepted], atol=1e-9)
     assert fast.comparisons < ref.comparisons           # the early exit saved work
     assert np.all(fast.score[~ref.accepted] <= ref.score[~ref.accepted] + 1e-9)
-    from interaction_tensor.kernels import score_pairs_numba
+    from interaction_tensor.engine.numba_backend import score_pairs_numba
     s, a, at, cmp = score_pairs_numba(scene.points[pp], po, table, scene.grid(), thr,
                                       corner_tensor.vectors, scene.spacing)
     np.testing.assert_array_equal(a, ref.accepted)
@@ -134,7 +133,7 @@ def test_far_queries_search_occupied_blocks_exactly(cell):
     search), outside the grid, on samples and on cell faces find the cKDTree's nearest."""
     from scipy.spatial import cKDTree
 
-    from interaction_tensor.kernels import FAR_BLOCK, FAR_CELLS
+    from interaction_tensor.geometry.grid import FAR_BLOCK, FAR_CELLS
     rng = np.random.default_rng(7)
     pts = np.r_[rng.random((3000, 3)) * [2, 2, 0],
                 rng.random((300, 3)) * [0.01, 0.01, 1.5] + [1.7, 0.2, 0],
@@ -199,7 +198,7 @@ def test_normal_filter_line_and_oriented():
 
 
 def test_top_k_suppression_keeps_predictions_apart(corner_tensor):
-    from interaction_tensor.predictions import top_k
+    from interaction_tensor.detection.places import top_k
     pos = np.array([[0, 0, 0], [0.01, 0, 0], [1, 0, 0], [1.02, 0, 0], [3, 0, 0]], float)
     sc = np.array([0.9, 0.95, 0.8, 0.85, 0.1])
     assert top_k(pos, sc, 10, 0.05) == [1, 3, 4]
@@ -217,7 +216,7 @@ def test_settings_are_validated():
 
 
 def test_detect_many_equals_one_at_a_time(corner_tensor):
-    from conftest import corner_example
+    from support import corner_example
     q, s = corner_example()
     # a second descriptor: the same interaction with the box turned into a 'down' tensor
     other = it.InteractionTensor.fit(q, s, "corner-box-2", it.TrainSettings(query_points=2000, seed=4))
@@ -232,92 +231,15 @@ def test_detect_many_equals_one_at_a_time(corner_tensor):
         assert [p.point_index for p in one.predictions] == [p.point_index for p in res.predictions]
 
 
-def test_adaptive_keypoint_order_changes_only_the_work(corner_tensor):
-    scene_geometry, _ = moved_corner_scene(0.4, np.array([0.1, -0.2, 0.0]))
-    scene = it.prepare_scene(scene_geometry, 0.01, seed=6)
-    runs = {}
-    for backend in ("numba", "numpy"):
-        for order in ("weight", "adaptive"):
-            runs[backend, order] = it.detect(scene, corner_tensor, it.DetectSettings(
-                sample_fraction=0.2, keypoint_order=order, backend=backend, pilot_pairs=64))
-    ref = runs["numpy", "weight"]
-    assert 0 < ref.pairs.accepted.sum() < len(ref.pairs.accepted)
-    for r in runs.values():
-        np.testing.assert_array_equal(r.pairs.accepted, ref.pairs.accepted)
-        acc = ref.pairs.accepted
-        np.testing.assert_allclose(r.pairs.score[acc], ref.pairs.score[acc], atol=1e-9)
-        np.testing.assert_allclose(r.heat, ref.heat, atol=1e-9)
-        assert ([(p.point_index, p.orientation_index) for p in r.predictions]
-                == [(p.point_index, p.orientation_index) for p in ref.predictions])
-    # the keypoints that fail most often come first: rejections need fewer comparisons
-    rej = ~ref.pairs.accepted
-    for backend in ("numba", "numpy"):
-        w, a = runs[backend, "weight"].pairs, runs[backend, "adaptive"].pairs
-        assert a.decided_at[rej].mean() < w.decided_at[rej].mean()
-    assert runs["numba", "adaptive"].stats["keypoint_order"] == "adaptive"
-
-
-@given(st.integers(0, 2 ** 31 - 1), st.floats(0.0, 1.0))
-@settings(max_examples=60, deadline=None)
-def test_simulated_cost_replays_the_kernels_early_exit(seed, frac):
-    """simulated_cost against a plain loop over keypoints with the kernels' decision rule."""
-    from interaction_tensor.detect import simulated_cost
-
-    rng = np.random.default_rng(seed)
-    p, n = int(rng.integers(1, 12)), int(rng.integers(1, 30))
-    max_terms = rng.uniform(0.0, 1.0, n)
-    max_terms /= max_terms.sum()
-    terms = max_terms * rng.uniform(0, 1, (p, n)) * (rng.uniform(size=(p, n)) < 0.8)
-    threshold = frac * float(max_terms.sum())
-    cost = rng.uniform(1, 5, n)
-    order = rng.permutation(n)
-    want = 0.0
-    for row in terms:
-        s, rest = 0.0, float(max_terms[order].sum())
-        for k in order:
-            s += row[k]
-            rest -= max_terms[k]
-            want += cost[k]
-            if s >= threshold - 1e-9 or s + rest < threshold - 1e-9:
-                break
-    assert simulated_cost(terms, max_terms, cost, threshold, order) == pytest.approx(want)
-
-
-def test_the_adaptive_order_is_the_cheapest_of_its_candidates_on_the_pilot(corner_tensor):
-    """pilot_order returns a permutation whose replayed early exit on the pilot's pairs costs
-    no more than the paper's weight order (one of its candidates)."""
-    import importlib
-
-    from interaction_tensor.scoring import all_terms
-
-    D = importlib.import_module("interaction_tensor.detect")
-
-    scene_geometry, _ = moved_corner_scene(0.4, np.array([0.1, -0.2, 0.0]))
-    scene = it.prepare_scene(scene_geometry, 0.01, seed=6)
-    det = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2))
-    table = keypoint_table(corner_tensor, det.settings)
-    order = D.pilot_order(table, scene, det.pair_point, det.pair_orientation, None,
-                          corner_tensor.vectors, 64, 0, det.threshold)
-    assert sorted(order) == list(range(table.n))
-    terms = all_terms(scene.points[det.pair_point], det.pair_orientation, table, scene,
-                      corner_tensor.vectors, lambda q: scene.tree.query(q)[1])
-    flat = np.ones(table.n)
-    # on all the pairs (not just the pilot's), with unit costs: no worse than 1.2x weight
-    assert (D.simulated_cost(terms, table.max_terms, flat, det.threshold, order)
-            <= 1.2 * D.simulated_cost(terms, table.max_terms, flat, det.threshold,
-                                      np.arange(table.n)))
-
-
 def test_default_detection_keeps_the_papers_partial_scores(corner_tensor):
     """A rejected pair keeps its partial score at the rejection, which depends on the keypoint
-    order. By default it must be the paper's: weight order, early exit (the NumPy reference);
-    the adaptive order (same results otherwise: the test above) keeps another."""
+    order: it is the paper's, weight order with early exit (the NumPy reference), whichever
+    stage comes first."""
     scene_geometry, _ = moved_corner_scene(0.4, np.array([0.1, -0.2, 0.0]))
     scene = it.prepare_scene(scene_geometry, 0.01, seed=6)
-    det = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2,
-                                                            stage_order="score-first"))
-    assert det.stats["keypoint_order"] == "weight"
-    table = keypoint_table(corner_tensor, det.settings)
+    det = detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2),
+                 engine=Engine(score_first=True))
+    table = corner_tensor.keypoint_table(det.settings)
     ref = score_pairs(scene.points[det.pair_point], det.pair_orientation, table, scene,
                       det.threshold, vectors=corner_tensor.vectors)
     rej = ~ref.accepted
@@ -333,13 +255,6 @@ def test_default_detection_keeps_the_papers_partial_scores(corner_tensor):
                                   ref.decided_at[first.scored])
     np.testing.assert_allclose(first.pairs.score[first.scored], ref.score[first.scored],
                                atol=1e-9)
-    adaptive = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2,
-                                                                 keypoint_order="adaptive",
-                                                                 stage_order="score-first"))
-    # the same decisions, but the rejected pairs' partial scores are another order's
-    np.testing.assert_array_equal(adaptive.pair_point, det.pair_point)
-    np.testing.assert_array_equal(adaptive.pairs.accepted, ref.accepted)
-    assert not np.allclose(adaptive.pairs.score[rej], ref.score[rej])
 
 
 def _torch_devices():
@@ -373,13 +288,13 @@ KERNELS = ["cdist", pytest.param("triton", marks=pytest.mark.skipif(
 def test_torch_backend_decides_like_the_cpu_paths(corner_tensor, scored_setup, criterion, device,
                                                   kernel):
     torch = pytest.importorskip("torch")
-    from interaction_tensor.torch_backend import TorchIndex, score_pairs_torch
+    from interaction_tensor.engine.torch_backend import TorchIndex, score_pairs_torch
     if kernel == "triton" and device == "cpu" and os.environ.get("TRITON_INTERPRET") != "1":
         pytest.skip("Triton on the CPU runs under TRITON_INTERPRET=1 only")
     scene, pp, po = scored_setup
     pp, po = pp[::3], po[::3]
     settings = it.DetectSettings(criterion=criterion)
-    table = keypoint_table(corner_tensor, settings)
+    table = corner_tensor.keypoint_table(settings)
     thr = corner_tensor.threshold(criterion, "weighted")
     ref = score_pairs(scene.points[pp], po, table, scene, thr)
     assert 0 < ref.accepted.sum() < len(pp)
@@ -436,7 +351,7 @@ def test_hot_copy_is_the_reordered_array(n):
     """The scene's sorted points and normals (asked for huge pages when large): exactly
     ``a[order]``, C-contiguous, of their own memory, for an empty, a small and a 9.6 MB
     array."""
-    from interaction_tensor.scene import hot_copy
+    from interaction_tensor.geometry.scene import hot_copy
 
     rng = np.random.default_rng(1)
     a = rng.random((n, 3))
@@ -450,7 +365,7 @@ def test_command_line_turns_numpys_huge_pages_off():
     """The one-shot CLI process keeps NumPy's arrays on 4 kB pages (a 2 M-point detection's
     peak varied by 130 MB from run to run with huge pages); the switch is restored here
     (the glibc settings of :func:`cli._one_shot_memory` are left out: they would stay)."""
-    from interaction_tensor import cli
+    from interaction_tensor.cli import main as cli
 
     switch = getattr(np._core.multiarray, "_set_madvise_hugepage", None)
     if switch is None:

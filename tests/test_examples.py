@@ -7,40 +7,25 @@ import pytest
 from scipy.spatial import cKDTree
 
 from interaction_tensor.errors import InputError
-from interaction_tensor.examples import interactions, shapes
-from interaction_tensor.evaluation.judge import Judge, JudgeScene
+from interaction_tensor import affordances
+from interaction_tensor.examples import posing
+from interaction_tensor.examples import shapes
 
-from conftest import SHARED_DATA
+from support import SHARED_DATA
 
 
 def test_eight_examples_with_the_papers_normals():
-    assert interactions.names() == ["filling-mug", "filling-cup", "placing-bottle",
+    assert affordances.example_names() == ["filling-mug", "filling-cup", "placing-bottle",
                                     "placing-bowl", "hanging-hanger", "hanging-handbag",
                                     "sitting-human", "riding-human"]
-    for name, sp in interactions.EXAMPLES.items():
+    for name in affordances.example_names():
+        sp = affordances.spec(name)
         assert sp.normal == ((0.0, 0.0, -1.0) if sp.affordance == "filling" else (0.0, 0.0, 1.0))
 
 
-@pytest.mark.parametrize("name", interactions.names())
-def test_procedural_example_is_posed_in_contact_and_valid(name):
-    ex = interactions.build(name)
-    assert ex.query.is_mesh and not ex.real_query
-    q = interactions.surface_points(ex.query, 8000)
-    s = interactions.surface_points(ex.scene_object, 100000, 1)
-    gap = cKDTree(s).query(q)[0].min()
-    assert gap < 0.005, f"{name}: the objects do not touch ({gap:.4f} m)"
-    # realistic sizes (metres)
-    size = np.ptp(ex.query.vertices, axis=0).max()
-    assert 0.05 < size < 2.0
-    # the example passes its own judge: no penetration, contact, support
-    judge = Judge.for_example(ex)
-    verdict = judge.judge(JudgeScene(ex.scene_object), np.eye(4))
-    assert verdict.valid, verdict.reasons
-
-
 def _gaps(ex, count=60000):
-    q = interactions.surface_points(ex.query, count)
-    s = interactions.surface_points(ex.scene_object, 300000, 1)
+    q = posing.surface_points(ex.query, count)
+    s = posing.surface_points(ex.scene_object, 300000, 1)
     return q, s, cKDTree(s).query(q)[0]
 
 
@@ -56,7 +41,7 @@ def _objects(real):
 @pytest.mark.parametrize("real", [False, True])
 @pytest.mark.parametrize("name", ["placing-bowl", "placing-bottle"])
 def test_placed_object_stands_on_the_table_top(name, real):
-    ex = interactions.build(name, _objects(real))
+    ex = affordances.build(name, _objects(real))
     q, _, gap = _gaps(ex)
     bottom = q[:, 2] <= q[:, 2].min() + 0.002
     assert abs(q[:, 2].min() - 0.75) < 0.002               # resting on the top at 0.75 m
@@ -67,7 +52,7 @@ def test_placed_object_stands_on_the_table_top(name, real):
 @pytest.mark.parametrize("real", [False, True])
 @pytest.mark.parametrize("name", ["filling-mug", "filling-cup"])
 def test_mug_stands_in_the_basin_under_the_tap_outlet(name, real):
-    ex = interactions.build(name, _objects(real))
+    ex = affordances.build(name, _objects(real))
     q, _, gap = _gaps(ex)
     assert abs(q[:, 2].min() - shapes.SINK_BOTTOM) < 0.002      # on the basin bottom
     rim = q[q[:, 2] >= q[:, 2].max() - 0.005]
@@ -80,7 +65,7 @@ def test_mug_stands_in_the_basin_under_the_tap_outlet(name, real):
 
 @pytest.mark.parametrize("name", ["hanging-hanger", "hanging-handbag"])
 def test_hook_hangs_on_the_rail(name):
-    ex = interactions.build(name)
+    ex = affordances.build(name)
     q, _, gap = _gaps(ex)
     top = shapes.RAIL_HEIGHT + shapes.RAIL_RADIUS
     assert gap.min() < 0.002                                   # touching the rail
@@ -95,22 +80,22 @@ def test_hook_hangs_on_the_rail(name):
 
 @pytest.mark.parametrize("real", [False, True])
 def test_seated_person_sits_on_the_seat_with_feet_on_the_floor(real):
-    ex = interactions.build("sitting-human", _objects(real))
+    ex = affordances.build("sitting-human", _objects(real))
     top = ex.support_point[2]
     assert ex.scene_object.vertices[:, 2].max() == pytest.approx(top, abs=1e-9)
-    zs, seat = interactions.seat_region(ex.query)
+    zs, seat = posing.seat_region(ex.query)
     stool = ex.scene_object.vertices
     lo, hi = stool[:, :2].min(axis=0), stool[:, :2].max(axis=0)
     faces = seat[(seat[:, 2] <= zs + 0.01)]                    # the seat faces: thighs, buttocks
     over = np.all((faces[:, :2] > lo) & (faces[:, :2] < hi), axis=1)
     assert over.mean() > 0.6                                   # mostly over the stool ...
-    d = cKDTree(interactions.surface_points(ex.scene_object, 300000, 1)).query(faces[over])[0]
+    d = cKDTree(posing.surface_points(ex.scene_object, 300000, 1)).query(faces[over])[0]
     assert zs == pytest.approx(top, abs=0.002)
     assert np.quantile(d, 0.95) < 0.01                         # ... within 1 cm of its top
     assert ex.query.vertices[:, 2].min() == pytest.approx(0.0, abs=1e-9)   # feet on the floor
     assert ex.scene_object.vertices[:, 2].min() == pytest.approx(0.0, abs=1e-9)
     # nothing of the person is under the seat top except the legs in front of it
-    q = interactions.surface_points(ex.query, 60000)
+    q = posing.surface_points(ex.query, 60000)
     stool = ex.scene_object.vertices
     over = np.all((q[:, :2] > lo) & (q[:, :2] < hi), axis=1)
     assert q[over, 2].min() > top - 0.002
@@ -118,7 +103,7 @@ def test_seated_person_sits_on_the_seat_with_feet_on_the_floor(real):
 
 @pytest.mark.parametrize("real", [False, True])
 def test_rider_sits_on_the_seat_hands_on_the_grips_feet_on_the_pegs(real):
-    ex = interactions.build("riding-human", _objects(real))
+    ex = affordances.build("riding-human", _objects(real))
     q, s, gap = _gaps(ex)
     sp = ex.support_point                                      # the seat's top centre
     seat = ((np.abs(q[:, 0] - sp[0]) <= 0.12) & (np.abs(q[:, 1] - sp[1]) <= 0.08)
@@ -135,45 +120,32 @@ def test_rider_sits_on_the_seat_hands_on_the_grips_feet_on_the_pegs(real):
 def test_sizes_are_realistic():
     assert np.ptp(shapes.mug().vertices[:, 2]) == pytest.approx(0.095, abs=0.002)
     assert shapes.stool().vertices[:, 2].max() == pytest.approx(0.45)
-    bike = interactions.build("riding-human").scene_object
+    bike = affordances.build("riding-human").scene_object
     assert bike.vertices[:, 2].min() == pytest.approx(0.0, abs=0.005)      # wheels on the ground
 
 
 def test_filling_descriptor_reference_point_is_the_tap():
-    tensor = interactions.build_descriptor("filling-cup", spacing=0.02)
+    tensor = affordances.build_descriptor("filling-cup", spacing=0.02)
     assert tensor.affordance_normal[2] == pytest.approx(-1.0)
     assert tensor.reference_point[2] == pytest.approx(shapes.TAP_OUTLET[2], abs=0.02)
 
 
-def test_real_query_objects_are_posed_by_the_same_rule():
-    objects = SHARED_DATA / "objects"
-    if not (objects / "ycb_mug.ply").exists():
-        pytest.skip("shared data not found")
-    for name in ("filling-mug", "placing-bowl", "sitting-human"):
-        ex = interactions.build(name, objects)
-        assert ex.real_query
-        verdict = Judge.for_example(ex).judge(JudgeScene(ex.scene_object), np.eye(4))
-        assert verdict.valid, (name, verdict.reasons)
-    ex = interactions.build("hanging-hanger", objects)        # no real hanger: procedural
-    assert not ex.real_query
-
-
 def test_missing_objects_file_is_an_input_error(tmp_path):
     with pytest.raises(InputError, match="no such object file"):
-        interactions.build("placing-bowl", tmp_path)
+        affordances.build("placing-bowl", tmp_path)
     with pytest.raises(InputError, match="unknown example"):
-        interactions.spec("juggling-balls")
+        affordances.spec("juggling-balls")
 
 
 def test_drop_onto_measures_the_vertical_gap():
     q = np.array([[0.0, 0.0, 1.0], [0.1, 0.0, 1.2]])
     s = np.array([[0.0, 0.0, 0.7], [0.1, 0.0, 0.5], [0.0, 0.0, 1.5]])
-    assert interactions.drop_onto(q, s) == pytest.approx(0.3)
-    assert interactions.drop_onto(q + [5, 5, 0], s) == np.inf
+    assert posing.drop_onto(q, s) == pytest.approx(0.3)
+    assert posing.drop_onto(q + [5, 5, 0], s) == np.inf
 
 
 def test_cli_examples_list_and_build(tmp_path, capsys):
-    from interaction_tensor.cli import main
+    from interaction_tensor.cli.main import main
 
     assert main(["examples", "list"]) == 0
     assert "riding-human" in capsys.readouterr().out

@@ -15,9 +15,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import interaction_tensor as it
-from interaction_tensor.clearance import (FAILS_FEET, PLACED, check_placements, feet_gaps,
-                                          feet_gaps_poses, standing_groups)
-from interaction_tensor.examples import interactions
+from interaction_tensor.detection.search import Engine, detect
+from interaction_tensor.placement.checks import (feet_gaps,
+                                          standing_groups)
+from interaction_tensor import affordances
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 
 
@@ -27,7 +28,7 @@ FEET_ONLY = dict(clearance=False, contact=False, interior=False, ground=False)
 
 @pytest.fixture(scope="module")
 def sitting():
-    return interactions.build_descriptor("sitting-human")
+    return affordances.build_descriptor("sitting-human")
 
 
 def test_the_sitting_example_stands_on_its_feet(sitting):
@@ -39,7 +40,7 @@ def test_the_sitting_example_stands_on_its_feet(sitting):
         assert pts[:, 2].max() <= sitting.ground + 0.02
         sides.add(np.sign(pts[:, 1].mean()))
     assert sides == {-1, 1}                              # a left foot and a right foot
-    hanger = interactions.build_descriptor("hanging-hanger")
+    hanger = affordances.build_descriptor("hanging-hanger")
     assert standing_groups(hanger) == [] and hanger.feet_reach is None
 
 
@@ -95,42 +96,19 @@ def _room(floor: bool):
     return it.prepare_scene(parts_mesh(parts), 0.01, seed=0)
 
 
-@pytest.mark.parametrize("floor", [True, False])
-def test_a_person_on_a_stool_stands_and_one_on_a_counter_edge_does_not(sitting, floor):
-    """Facing +x (orientation 0): on the stool the feet rest on the floor (or, without a
-    floor, at the height of the lowest thing scanned); on the counter's edge they hang 45 cm
-    in the air, over the floor or over nothing."""
-    scene = _room(floor)
-    stool = np.array([[2.0, 0.0, 0.45]])
-    counter = np.array([[0.0, 0.0, 0.9]])
-    points = np.vstack([stool, counter])
-    orient = np.zeros(2, np.int64)
-    gaps = feet_gaps(points, orient, sitting, scene, 8)
-    assert gaps[0] <= sitting.feet_reach < 0.4 < gaps[1]
-    settings_ = it.DetectSettings(**FEET_ONLY, feet=True)
-    assert check_placements(points, orient, sitting, settings_, scene)[1].tolist() \
-        == [PLACED, FAILS_FEET]
-    off = it.DetectSettings(**FEET_ONLY, feet=False)
-    assert check_placements(points, orient, sitting, off, scene)[1].tolist() == [PLACED, PLACED]
-    # the same through 4x4 poses (the labelled set's form)
-    poses = np.stack([sitting.pose(p, 0.0) for p in points])
-    np.testing.assert_allclose(feet_gaps_poses(poses, sitting, scene), gaps, atol=1e-12)
-
-
 def test_detection_on_the_counter_room_predicts_no_one_on_the_counter(sitting):
     """End to end: every pair the score accepts (a low threshold) on the room with a floor;
     with the feet test no accepted placement has its seat on the counter top."""
     scene = _room(True)
-    tensor = interactions.build_descriptor("sitting-human")
+    tensor = affordances.build_descriptor("sitting-human")
     tensor.set_acceptance(1e-3)
     on_top = np.flatnonzero(scene.points[:, 2] > 0.89)
-    loose = dict(clearance=False, contact=False, interior=False, collision=False, top_k=3,
-                 stage_order="score-first")
-    det = it.detect(scene, tensor, it.DetectSettings(**loose), test_indices=on_top[::4])
+    loose = dict(skip_tests=("clearance", "contact", "interior", "collision"), top_k=3)
+    det = detect(scene, tensor, it.DetectSettings(**loose), test_indices=on_top[::4],
+                 engine=Engine(score_first=True))
     assert det.stats["pairs_accepted_by_score"] > 0
     # tests first: the same placements kept, and no pair failing the feet test scored
-    first = it.detect(scene, tensor, it.DetectSettings(**{**loose, "stage_order": "auto"}),
-                      test_indices=on_top[::4])
+    first = it.detect(scene, tensor, it.DetectSettings(**loose), test_indices=on_top[::4])
     np.testing.assert_array_equal(first.pairs.accepted, det.pairs.accepted)
     assert first.stats["pairs_scored"] == len(first.pair_point) - \
         first.stats["pairs_failing_feet"] < len(first.pair_point)
@@ -144,8 +122,9 @@ def test_detection_on_the_counter_room_predicts_no_one_on_the_counter(sitting):
         feet = np.concatenate([c for c, _ in standing_groups(tensor)])
         posed = feet @ pose[:3, :3].T + pose[:3, 3]
         assert np.any(np.all(np.abs(posed[:, :2] - [-0.2, 0.0]) < [0.3, 0.6], axis=1))
-    det = it.detect(scene, tensor, it.DetectSettings(**loose, feet=False),
-                    test_indices=on_top[::4])
+    det = detect(scene, tensor, it.DetectSettings(
+        skip_tests=loose["skip_tests"] + ("feet",), top_k=3), test_indices=on_top[::4],
+        engine=Engine(score_first=True))
     assert det.pairs.accepted.sum() == det.stats["pairs_accepted_by_score"]
 
 

@@ -3,7 +3,8 @@ import pytest
 import trimesh
 
 import interaction_tensor as it
-from interaction_tensor.io import load_geometry, write_ply_points
+from interaction_tensor.geometry.load import load_geometry
+from interaction_tensor.geometry.files import write_ply_points
 
 
 @pytest.fixture()
@@ -90,11 +91,11 @@ def test_errors_name_the_file_and_the_problem(tmp_path):
 def test_degenerate_geometry_is_rejected(tmp_path):
     flat = it.Geometry(np.zeros((10, 3)), source="zeros")
     with pytest.raises(it.InputError, match="coincide"):
-        it.io.validate_geometry(flat)
+        it.validate_geometry(flat)
     v = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0]], float)
     line = it.Geometry(v, np.array([[0, 1, 2]]), source="line")
     with pytest.raises(it.InputError, match="zero surface area|at least|one line"):
-        it.io.validate_geometry(line, min_points=3)
+        it.validate_geometry(line, min_points=3)
 
 
 def test_write_json_writes_gathered_columns_as_their_arrays(tmp_path):
@@ -102,7 +103,7 @@ def test_write_json_writes_gathered_columns_as_their_arrays(tmp_path):
     the gathered array would be, a block at a time, without being gathered whole."""
     import json
 
-    from interaction_tensor.io import Gathered, write_json
+    from interaction_tensor.geometry.files import Gathered, write_json
 
     rng = np.random.default_rng(3)
     base = rng.random(250_003)

@@ -2,17 +2,17 @@
 
 from __future__ import annotations
 
-import sys
 
 import numpy as np
 import pytest
 
 import interaction_tensor as it
-from interaction_tensor.detect import keypoint_table
-from interaction_tensor import kernels
-from interaction_tensor.kernels import score_pairs_numba
+from interaction_tensor.detection.search import Engine, detect
+from interaction_tensor.engine import backends
+from interaction_tensor.engine import numba_backend as kernels
+from interaction_tensor.engine.numba_backend import score_pairs_numba
 
-from conftest import corner_example
+from support import corner_example
 
 
 @pytest.mark.parametrize("criterion,vectors", [("paper", "surface"), ("gaussian", "points")])
@@ -27,7 +27,7 @@ def test_cached_scoring_is_bit_identical(criterion, vectors):
     idx = rng.choice(len(scene), 3000, replace=False)
     orient = rng.integers(0, 8, len(idx))
     st = it.DetectSettings(criterion=criterion)
-    table = keypoint_table(t, st)
+    table = t.keypoint_table(st)
     grid = scene.grid()
     for early in (True, False):
         plain = score_pairs_numba(scene.points[idx], orient, table, grid, 0.6, vectors,
@@ -52,7 +52,7 @@ def test_nearest_through_a_built_cache_is_the_grid_search():
     grid = scene.grid()
     grid.cache = None
     score_pairs_numba(scene.points[idx], rng.integers(0, 8, len(idx)),
-                      keypoint_table(t, it.DetectSettings()), grid, 0.6, t.vectors,
+                      t.keypoint_table(it.DetectSettings()), grid, 0.6, t.vectors,
                       scene.spacing, True, cache=True)
     cache = grid.cache
     assert cache is not None and cache.used[0] > 0
@@ -78,8 +78,8 @@ def test_detection_with_the_cache_decides_alike(monkeypatch):
     scene = it.prepare_scene(s, 0.01, seed=2)
 
     def run(mode):
-        det = it.detect(scene, t, it.DetectSettings(sample_fraction=0.4, neighbour_cache=mode,
-                                                    batch_size=256))
+        det = detect(scene, t, it.DetectSettings(sample_fraction=0.4),
+                     engine=Engine(neighbour_cache=mode, batch_size=256))
         assert (scene.grid().cache is not None) == (mode is True)
         return det.pairs
 
@@ -87,10 +87,9 @@ def test_detection_with_the_cache_decides_alike(monkeypatch):
     assert plain.accepted.any() and not plain.accepted.all()
     budgets = []
     # tiny budgets (no floor) drop and rebuild the cache's trees: still exact
-    monkeypatch.setattr(sys.modules["interaction_tensor.detect"], "CACHE_AUTO_FLOOR", 0)
+    monkeypatch.setattr(backends, "CACHE_AUTO_FLOOR", 0)
     for mode, per_point in ((None, 64), (None, 8), (None, 1), (True, 64)):
-        monkeypatch.setattr(sys.modules["interaction_tensor.detect"],
-                            "CACHE_AUTO_BYTES_PER_POINT", per_point)
+        monkeypatch.setattr(backends, "CACHE_AUTO_BYTES_PER_POINT", per_point)
         got = run(mode)
         for name in ("score", "accepted", "decided_at"):
             assert np.array_equal(getattr(plain, name), getattr(got, name)), (mode, per_point)
@@ -101,18 +100,17 @@ def test_detection_with_the_cache_decides_alike(monkeypatch):
 
 
 def test_auto_cache_follows_the_test_point_density():
-    from interaction_tensor.detect import CACHE_AUTO_FRACTION, cache_pays
+    from interaction_tensor.engine.backends import CACHE_AUTO_FRACTION, cache_pays
 
-    auto = it.DetectSettings()
-    assert auto.neighbour_cache is None
-    assert cache_pays(auto, 0.3) and cache_pays(auto, CACHE_AUTO_FRACTION)
-    assert not cache_pays(auto, 0.05)
-    assert cache_pays(it.DetectSettings(neighbour_cache=True), 0.001)
-    assert not cache_pays(it.DetectSettings(neighbour_cache=False), 1.0)
+    assert Engine().neighbour_cache is None
+    assert cache_pays(None, 0.3) and cache_pays(None, CACHE_AUTO_FRACTION)
+    assert not cache_pays(None, 0.05)
+    assert cache_pays(True, 0.001)
+    assert not cache_pays(False, 1.0)
 
 
 def test_spatial_order_keeps_each_candidate_whole():
-    from interaction_tensor.detect import _pairs_of, spatial_order
+    from interaction_tensor.engine.backends import pairs_of, spatial_order
 
     rng = np.random.default_rng(4)
     pts = rng.random((500, 3))
@@ -122,7 +120,7 @@ def test_spatial_order_keeps_each_candidate_whole():
 
     order = spatial_order(pts, pp, 8, SimpleNamespace(origin=np.zeros(3), cell=0.1))
     assert sorted(order.tolist()) == list(range(120))       # a permutation of candidates
-    pairs = _pairs_of(order, 8)
+    pairs = pairs_of(order, 8)
     assert np.array_equal(np.sort(pairs), np.arange(960))
     assert np.all(pp[pairs].reshape(-1, 8) == pp[pairs][::8, None])   # runs of one point
     # nearby candidates come together: Z-order cells are contiguous
@@ -146,7 +144,7 @@ def test_a_cache_over_its_budget_drops_its_oldest_trees_and_stays_exact():
     rng = np.random.default_rng(5)
     idx = rng.choice(len(scene), 4000, replace=False)
     job = kernels.ScoreJob(scene.points[idx], rng.integers(0, 8, len(idx)),
-                           keypoint_table(t, it.DetectSettings()), 0.6, t.vectors,
+                           t.keypoint_table(it.DetectSettings()), 0.6, t.vectors,
                            scene.spacing, True)
     grid = scene.grid()
     plain = kernels.score_jobs([job], grid, False)[0]
@@ -198,23 +196,23 @@ def test_the_cache_arrays_grow_geometrically_up_to_the_budget():
 def test_the_auto_cache_has_a_floor_whatever_the_scene_size(monkeypatch):
     """A small scene's auto cache gets at least CACHE_AUTO_FLOOR bytes (24 bytes a point left
     a person's search rebuilding its trees), a large one 24 bytes a point, both at most the
-    cache's own limit; the budget reaches the kernels."""
-    det_mod = sys.modules["interaction_tensor.detect"]
+    cache's own limit; the budget reaches the kernels, whichever stage comes first."""
     seen = []
-    real = det_mod._score_all
+    real = backends.NumbaBackend.score
 
-    def spy(*args, **kwargs):
-        seen.append(args[-1] if len(args) > 8 else kwargs.get("cache_bytes"))
-        return real(*args, **kwargs)
+    def spy(self, *args, **kwargs):
+        seen.append(kwargs.get("cache_bytes"))
+        return real(self, *args, **kwargs)
 
-    monkeypatch.setattr(det_mod, "_score_all", spy)
+    monkeypatch.setattr(backends.NumbaBackend, "score", spy)
     q, s = corner_example()
     t = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1))
     scene = it.prepare_scene(s, 0.01, seed=2)
     it.detect(scene, t, it.DetectSettings(sample_fraction=0.4))
-    assert seen == [det_mod.CACHE_AUTO_FLOOR] and det_mod.CACHE_AUTO_FLOOR >= 32 * 2**20
-    # score first: the decisions, then the completion of the placed pairs' scores
-    it.detect(scene, t, it.DetectSettings(sample_fraction=0.4, stage_order="score-first"))
-    assert seen == [det_mod.CACHE_AUTO_FLOOR] * 3
-    assert det_mod.CACHE_AUTO_BYTES_PER_POINT * 10**8 > kernels.CACHE_BYTES >= \
-        det_mod.CACHE_AUTO_FLOOR
+    assert seen == [backends.CACHE_AUTO_FLOOR] and backends.CACHE_AUTO_FLOOR >= 32 * 2**20
+    detect(scene, t, it.DetectSettings(sample_fraction=0.4), engine=Engine(score_first=True))
+    assert seen == [backends.CACHE_AUTO_FLOOR] * 2
+    assert backends.cache_budget(10**8, None) == kernels.CACHE_BYTES
+    assert backends.cache_budget(10**8, True) == kernels.CACHE_BYTES
+    assert backends.CACHE_AUTO_BYTES_PER_POINT * 10**8 > kernels.CACHE_BYTES >= \
+        backends.CACHE_AUTO_FLOOR

@@ -12,24 +12,25 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
-from interaction_tensor.clearance import (FAILS_CONTACT, FAILS_INTERIOR, PLACED,
+from interaction_tensor.placement.checks import (FAILS_CONTACT, FAILS_INTERIOR, PLACED,
                                           check_placements, contact_fractions, contact_kept,
                                           interior_violations, nearest_samples)
-from interaction_tensor.examples import interactions, shapes
+from interaction_tensor import affordances
+from interaction_tensor.examples import shapes
 from interaction_tensor.examples.procedural import box_part, parts_mesh
-from interaction_tensor.sampling import winding_numbers
+from interaction_tensor.geometry.sampling import winding_numbers
 
 
 @pytest.fixture(scope="module")
 def sitting():
-    ex = interactions.build("sitting-human")
-    return ex, interactions.build_descriptor("sitting-human", example=ex, tuned=False)
+    ex = affordances.build("sitting-human")
+    return ex, affordances.build_descriptor("sitting-human", example=ex, tuned=False)
 
 
 @pytest.fixture(scope="module")
 def hanging():
-    ex = interactions.build("hanging-hanger")
-    return ex, interactions.build_descriptor("hanging-hanger", example=ex, tuned=False)
+    ex = affordances.build("hanging-hanger")
+    return ex, affordances.build_descriptor("hanging-hanger", example=ex, tuned=False)
 
 
 def _scene(parts):
@@ -131,8 +132,9 @@ def test_a_board_through_the_body_violates_the_interior_and_a_seat_does_not(sitt
     assert interior_violations(*_at_reference(t), t, 0.01, 8, board, None)[0] == through
     # as a placement: the board fails the interior test (not the clearance test, which a
     # 2 cm board crossing a body hardly touches), the chair passes everything
-    t2 = _copy_with(t, interior_limit=0.02, contact=("all", 0.1, 0.5, 30.0))
-    st = it.DetectSettings(clearance_max_violations=0.2)
+    t2 = _copy_with(t, interior_limit=0.02, contact=("all", 0.1, 0.5, 30.0),
+                    clearance_limit=0.2)
+    st = it.DetectSettings()
     for sc, want in ((chair, PLACED), (board, FAILS_INTERIOR)):
         _, outcome = check_placements(*_at_reference(t), t2, st, sc, sc.grid())
         assert outcome[0] == want

@@ -7,7 +7,6 @@ well under two minutes on 2 cores.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 
@@ -21,9 +20,9 @@ import interaction_tensor as it
 from interaction_tensor.errors import InputError
 from interaction_tensor.examples.procedural import bookcase, parts_mesh, room_shell, table
 
-from conftest import shared_file
+from support import shared_file
 
-rd = pytest.importorskip("interaction_tensor.realdata")
+rd = pytest.importorskip("interaction_tensor.capture")
 pytest.importorskip("open3d")
 Image = pytest.importorskip("PIL.Image")
 
@@ -184,7 +183,7 @@ def test_depth_faces_join_neighbours_and_leave_steps_open(tmp_path):
                   elements=st.sampled_from([0.0, 0.5, 0.505, 0.52, 1.0, 1.02, 3.0])),
        st.integers(2, 400))
 def test_depth_faces_of_any_image_join_only_close_valid_neighbours(depth, max_faces):
-    from interaction_tensor.realdata import rgbd
+    from interaction_tensor.capture import rgbd
 
     faces = rd.depth_faces(depth, max_faces=max_faces)
     valid = depth > 0
@@ -249,7 +248,7 @@ def test_frame_and_scan_keep_their_surface(tmp_path):
 def test_surface_noise_measures_the_spread_not_the_edges():
     from scipy.spatial import cKDTree
 
-    from interaction_tensor.realdata.pipeline import surface_noise
+    from interaction_tensor.capture.pipeline import surface_noise
 
     rng = np.random.default_rng(0)
     grid = np.stack(np.meshgrid(np.arange(0, 1, 0.01), np.arange(0, 1, 0.01)), -1).reshape(-1, 2)
@@ -271,7 +270,7 @@ def test_tum_surface_collision_test():
     clear patch of the desk top is clear of it, a block through the top's height is not, and
     neither is a post through it; so detection's collision test runs on the frame. The
     surface's noise is measured (under 1 cm at this spacing)."""
-    from interaction_tensor.collision import Body, MeshCollider, box
+    from interaction_tensor.geometry.collision import Body, MeshCollider, box
 
     frame = shared_file("rgbd/tum_desk/depth.png").parent
     scene = it.load_scene(str(frame), spacing=SPACING)
@@ -299,35 +298,6 @@ def test_tum_surface_collision_test():
     pose[:3, 3] = centre
     assert collider.collides(Body(*box((-0.05, -0.05, -0.03), (0.05, 0.05, 0.03))), pose)
     assert collider.collides(Body(*box((-0.01, -0.01, -0.1), (0.01, 0.01, 0.1))), pose)
-
-
-def test_tum_sitting_finds_the_chair():
-    """The sitting example on the TUM frame, as ``itensor detect FRAME sitting-human.npz``
-    runs it (the gaussian criterion with its tuned S_aff, the collision test on the frame's
-    triangles): its best place is on the chair at the left of the view, the seat on the
-    chair's seat (0.45-0.6 m up, not the 0.72 m desk top), the feet over the floor within
-    reach, and the judge, on the frame's own triangles, finds it valid."""
-    from interaction_tensor.evaluation.judge import Judge, JudgeScene
-    from interaction_tensor.examples import interactions
-
-    objects = shared_file("objects/paper_bowl.ply").parent
-    ex = interactions.build("sitting-human", objects)
-    tensor = interactions.build_descriptor("sitting-human", objects, example=ex)
-    assert tensor.threshold("gaussian") == interactions.ACCEPTANCE["sitting"][
-        "gaussian_threshold"] < 0.5
-    frame = shared_file("rgbd/tum_desk/depth.png").parent
-    result = it.detect(str(frame), tensor, it.DetectSettings(top_k=3))
-    assert result.settings.criterion == "gaussian" and result.stats["collision_test"] == "on"
-    assert result.predictions, "no seat found"
-    best = result.predictions[0]
-    assert 0.45 < best.position[2] < 0.6 and best.position[0] < -0.3     # the left chair
-    # the feet over the floor (z = 0), within the feet test's reach: this chair's seat is
-    # 11 cm higher than the example's stool (0.425 m), so they hang about 11 cm above it
-    lowest = (best.pose[:3, :3] @ tensor.query_vertices.T)[2].min() + best.pose[2, 3]
-    assert 0.0 < lowest < tensor.feet_reach
-    scene = result.scene
-    verdict = Judge.for_example(ex).judge(JudgeScene(it.Geometry(*scene.mesh)), best.pose)
-    assert verdict.valid, verdict.reasons
 
 
 def test_mismatched_sizes(tmp_path):
@@ -489,21 +459,21 @@ def test_no_align_and_units_warning():
 # ----------------------------------------------------------------------------- CLI glue
 def _detect_args(argv):
     """``itensor detect`` arguments parsed by the real parser."""
-    from interaction_tensor.cli import build_parser
+    from interaction_tensor.cli.main import build_parser
 
     return build_parser().parse_args(["detect", *argv, "-o", "unused"])
 
 
 def _scene(argv):
     from interaction_tensor.api import load_scene
-    from interaction_tensor.cli import scene_options
+    from interaction_tensor.cli.main import scene_options
 
     args = _detect_args(argv)
     return load_scene(args.scene, SPACING, **scene_options(args))
 
 
 def test_cli_options_parse():
-    from interaction_tensor.cli import scene_options
+    from interaction_tensor.cli.main import scene_options
 
     a = _detect_args(["d.npz", "--depth", "x.png", "--intrinsics", "i.json",
                       "--depth-scale", "5000", "--no-remove-outliers", "--up", "auto"])

@@ -10,12 +10,12 @@ import trimesh
 from hypothesis import given, settings as hsettings, strategies as st
 
 import interaction_tensor as it
-from interaction_tensor.cli import build_parser, main
+from interaction_tensor.cli.main import build_parser, main
 from interaction_tensor.errors import InputError, SettingsError
-from interaction_tensor.sampling import winding_numbers, winding_numbers_reference
+from interaction_tensor.geometry.sampling import winding_numbers, winding_numbers_reference
 from interaction_tensor.settings import DetectSettings, TrainSettings
 
-from conftest import plane
+from support import plane
 
 # (subcommand and positional arguments, option, a refused value, what the message says)
 BAD_OPTIONS = [
@@ -27,7 +27,8 @@ BAD_OPTIONS = [
     (["detect", "s.ply", "d.npz"], "--outlier-std", "0", "> 0"),
     (["detect", "s.ply", "d.npz"], "--outlier-neighbors", "0", "[1, 1000]"),
     (["detect", "s.ply", "d.npz"], "--plane-distance", "inf", "(0, 1]"),
-    (["detect", "s.ply", "d.npz"], "--top-k", "ten", "integer >= 0"),
+    (["detect", "s.ply", "d.npz"], "--top-k", "ten", "integer >= 1"),
+    (["detect", "s.ply", "d.npz"], "--top-k", "0", "integer >= 1"),
     (["detect", "s.ply", "d.npz"], "--sample-fraction", "abc", "(0, 1]"),
     (["detect", "s.ply", "d.npz"], "--sample-fraction", "0", "(0, 1]"),
     (["detect", "s.ply", "d.npz"], "--spacing", "1e-6", "[0.001, 1]"),
@@ -38,7 +39,7 @@ BAD_OPTIONS = [
     (["train", "q.ply", "s.ply"], "--query-points", "50", "[100, 1e+06]"),
     (["batch", "--scenes", "s.ply", "--descriptors", "d.npz", "-o", "out"],
      "--workers", "-1", "[0, 1024]"),
-    (["evaluate"], "--spacing", "0", "[0.001, 1]"),
+    (["paper", "evaluate"], "--spacing", "0", "[0.001, 1]"),
     (["demo"], "--seed", "-1", "non-negative integer"),
 ]
 
@@ -86,7 +87,7 @@ def test_settings_refuse_what_the_cli_refuses():
 
 
 def test_realdata_cleaning_options_are_checked(tmp_path):
-    from interaction_tensor.realdata import prepare_real_scene
+    from interaction_tensor.capture import prepare_real_scene
 
     g = plane(0.0, 0.5)
     for name, value in (("voxel_size", float("nan")), ("voxel_size", -0.01),
@@ -175,8 +176,8 @@ def test_tampered_intrinsics_are_refused_or_sane(changes, drop, tmp_path_factory
     principal point outside the image."""
     import json
 
-    from conftest import shared_file
-    from interaction_tensor.realdata import load_intrinsics
+    from support import shared_file
+    from interaction_tensor.capture import load_intrinsics
 
     data = json.loads(shared_file("rgbd/tum_desk/intrinsics.json").read_text())
     data.update(changes)
@@ -202,7 +203,7 @@ def test_tampered_intrinsics_are_refused_or_sane(changes, drop, tmp_path_factory
 def test_cut_or_damaged_frame_images_are_refused(which, fraction, garbage, tmp_path_factory):
     import shutil
 
-    from conftest import shared_file
+    from support import shared_file
 
     frame = tmp_path_factory.mktemp("frame")
     for name in ("depth.png", "color.png", "intrinsics.json"):
@@ -215,7 +216,7 @@ def test_cut_or_damaged_frame_images_are_refused(which, fraction, garbage, tmp_p
 
 
 def test_a_scene_too_big_for_memory_is_refused_up_front(monkeypatch):
-    from interaction_tensor import scene as scene_mod
+    from interaction_tensor.geometry import scene as scene_mod
 
     scene_mod.check_memory(1_000_000, "big.ply", available=2 ** 31)          # 0.3 GB: fine
     with pytest.raises(InputError, match=r"big.ply: 20,000,000 scene points need about 5.6 GB "
@@ -246,7 +247,7 @@ def _greedy_reference(positions, scores, k, radius):
 def test_top_k_sweep_is_the_greedy_suppression(n, k, radius, ties, seed):
     """The block sweep (no (N, 3) temporary per pick) picks exactly what the greedy
     definition picks, ties to the lower index included."""
-    from interaction_tensor.predictions import top_k
+    from interaction_tensor.detection.places import top_k
 
     rng = np.random.default_rng(seed)
     positions = rng.random((n, 3)) * [2, 2, 0.1]
@@ -264,7 +265,7 @@ def test_a_scene_with_no_candidate_says_why(tmp_path, capsys, corner_tensor):
     g = np.stack(np.meshgrid(np.linspace(0, 0.5, 30), np.linspace(0, 0.5, 30)), -1).reshape(-1, 2)
     pts = np.column_stack([np.zeros(len(g)), g])                   # a wall: normals along x
     normals = np.tile([1.0, 0.0, 0.0], (len(pts), 1))
-    from interaction_tensor.io import write_ply_points
+    from interaction_tensor.geometry.files import write_ply_points
     write_ply_points(tmp_path / "wall.ply", pts, normals=normals)
     corner_tensor.save(tmp_path / "t.npz")
     assert main(["detect", str(tmp_path / "wall.ply"), str(tmp_path / "t.npz"),

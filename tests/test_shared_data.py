@@ -6,7 +6,7 @@ import pytest
 import interaction_tensor as it
 from interaction_tensor.examples.procedural import parts_mesh, table
 
-from conftest import shared_file
+from support import shared_file
 
 
 @pytest.fixture(scope="module")

@@ -15,10 +15,10 @@ from pathlib import Path
 import pytest
 
 import interaction_tensor as it
-from interaction_tensor.cli import main
-from interaction_tensor.io import atomic_dir, write_mesh
+from interaction_tensor.cli.main import main
+from interaction_tensor.geometry.files import atomic_dir, write_mesh
 
-from conftest import corner_example
+from support import corner_example
 
 
 @pytest.fixture(scope="module")
@@ -57,7 +57,7 @@ def test_a_signal_mid_write_leaves_the_earlier_result(inputs, tmp_path, sig, cod
     # the child starts with SIGINT at its default, as a command typed at a terminal does: a
     # test run started in the background (`pytest &` in a script) has SIGINT ignored, which
     # its children inherit, and Python then leaves it ignored (exit 0, nothing on stderr)
-    run = subprocess.Popen([sys.executable, "-m", "interaction_tensor.cli",
+    run = subprocess.Popen([sys.executable, "-m", "interaction_tensor.cli.main",
                             *_detect_argv(inputs, out, "--top-k", "5", "--render")],
                            stderr=subprocess.PIPE, text=True, preexec_fn=_default_sigint)
     deadline = time.time() + 300
@@ -112,7 +112,7 @@ def test_signals_wait_while_a_temporary_is_made_or_swapped():
     """SIGTERM arriving between making a temporary and entering the block that removes it
     left .part files behind under load (1 run in the full suite): it is now held back over
     those few lines and raised right after them."""
-    from interaction_tensor.io import _signals_deferred
+    from interaction_tensor.geometry.files import _signals_deferred
 
     class Stop(Exception):
         pass
@@ -145,7 +145,7 @@ def test_a_signal_held_while_the_temporary_is_made_still_removes_it(tmp_path, mo
     (the SIGTERM case of the test above, 1 run in 4 of this file on 2026-11-25)."""
     import tempfile
 
-    import interaction_tensor.io as io_mod
+    import interaction_tensor.geometry.files as io_mod
 
     class Stop(Exception):
         pass

@@ -1,7 +1,7 @@
 """The three calls most users need: :func:`train`, :func:`detect` and ``result.save``.
 
 Every geometry argument takes what a user already holds: a path (any format of
-:mod:`.readers`), a :class:`~interaction_tensor.io.Geometry`, a ``trimesh`` mesh, point cloud or
+:mod:`.readers`), a :class:`~interaction_tensor.geometry.core.Geometry`, a ``trimesh`` mesh, point cloud or
 scene, an Open3D point cloud or triangle mesh, or an ``(N, 3)`` array (``(N, 6)``: points and
 normals). The command line is a thin shell over exactly these functions, with the same
 defaults::
@@ -15,20 +15,26 @@ defaults::
 from __future__ import annotations
 
 import os
+from dataclasses import fields, replace
 import time
 from pathlib import Path
 
 import numpy as np
 
-from .errors import InputError, SettingsError
-from .settings import DetectSettings, TrainSettings
+from interaction_tensor import affordances
+from interaction_tensor.capture import load_rgbd, prepare_real_scene
+from interaction_tensor.descriptor.tensor import InteractionTensor
+from interaction_tensor.detection.search import detect_many
+from interaction_tensor.errors import InputError, SettingsError
+from interaction_tensor.geometry.core import MAX_OBJECT_EXTENT, Geometry
+from interaction_tensor.geometry.load import as_geometry
+from interaction_tensor.geometry.scene import Scene, prepare_scene
+from interaction_tensor.settings import MIN_SPACING, DetectSettings, TrainSettings
 
 #: cleaning and alignment options of frames and scans (see :func:`prepare_real_scene`)
 CLEANING_OPTIONS = ("align", "max_tilt_deg", "voxel_size", "remove_outliers",
                     "outlier_neighbors", "outlier_std", "plane_distance", "normals_orientation")
 
-#: affordances whose tuned acceptance :func:`train` can give a new descriptor
-ACCEPTANCES = ("placing", "filling", "hanging", "sitting", "riding")
 
 
 def _direction(value, name: str):
@@ -49,7 +55,6 @@ def _direction(value, name: str):
 
 def load_tensor(tensor):
     """An :class:`InteractionTensor` from itself or from a descriptor path."""
-    from .descriptor import InteractionTensor
 
     if isinstance(tensor, InteractionTensor):
         return tensor
@@ -89,12 +94,10 @@ def train(query, scene_object, affordance: str = "interaction", *, acceptance: s
 
     Returns the fitted :class:`InteractionTensor` (``.save(path)`` writes the descriptor).
     """
-    from .descriptor import InteractionTensor
-    from .io import as_geometry
 
-    if acceptance is not None and acceptance not in ACCEPTANCES:
-        raise SettingsError(f"acceptance must be one of {ACCEPTANCES}, got {acceptance!r}")
-    from .io import MAX_OBJECT_EXTENT
+    if acceptance is not None and acceptance not in affordances.acceptances():
+        raise SettingsError(f"acceptance must be one of {tuple(affordances.acceptances())}, "
+                            f"got {acceptance!r}")
 
     q = as_geometry(query, scale=scale, up=up, name="query", max_extent=MAX_OBJECT_EXTENT)
     s = as_geometry(scene_object, scale=scale, up=up, name="scene_object",
@@ -111,9 +114,7 @@ def train(query, scene_object, affordance: str = "interaction", *, acceptance: s
     tensor = InteractionTensor.fit(q, s, affordance, settings, reference_point=reference_point,
                                    ground=ground)
     if acceptance is not None:
-        from .examples.interactions import acceptance as tuned
-
-        tensor.set_acceptance(**tuned(acceptance))
+        tensor.set_acceptance(**affordances.acceptance(acceptance))
     return tensor
 
 
@@ -151,8 +152,6 @@ def load_scene(scene=None, spacing: float = 0.01, *, scan: bool = False, normals
     (:func:`~.realdata.depth_faces`), a mesh scan's its own, both aligned with the points and
     with their ``surface_noise``: detection's collision test runs on them.
     """
-    from .io import Geometry, as_geometry
-    from .scene import Scene, prepare_scene
 
     if isinstance(scene, Scene):
         return scene
@@ -162,7 +161,6 @@ def load_scene(scene=None, spacing: float = 0.01, *, scan: bool = False, normals
                             f"{', '.join(unknown)}")
     if "normals_orientation" in cleaning:
         cleaning["normals"] = cleaning.pop("normals_orientation")
-    from .settings import MIN_SPACING
 
     if not (spacing and np.isfinite(spacing) and MIN_SPACING <= spacing <= 1.0):
         raise SettingsError(f"spacing must be between {MIN_SPACING} and 1 metre, got {spacing}")
@@ -181,7 +179,6 @@ def load_scene(scene=None, spacing: float = 0.01, *, scan: bool = False, normals
         geometry = as_geometry(scene, normals, scale=scale, up="z" if up == "auto" else up,
                                name="scene")
         return prepare_scene(geometry, spacing, seed, max_points)
-    from .realdata import load_rgbd, prepare_real_scene
 
     if frame:
         color, depth, intrinsics = _frame_paths(scene if is_dir else None, color, depth,
@@ -262,9 +259,7 @@ def detect(scene, tensor, settings: DetectSettings | None = None, *, progress: b
     Returns a :class:`Detection`: ``positions``, ``scores``, ``orientations`` and ``poses`` of
     the top predictions as arrays, ``save(dir)``, ``to_trimesh()``, ``to_open3d()``.
     """
-    from dataclasses import fields, replace
 
-    from .detect import detect_many
 
     tensor = load_tensor(tensor)
     names = {f.name for f in fields(DetectSettings)}
@@ -275,8 +270,7 @@ def detect(scene, tensor, settings: DetectSettings | None = None, *, progress: b
         raise SettingsError(str(exc)) from None
     t0 = time.perf_counter()
     spacing = settings.scene_spacing or tensor.scene_spacing
-    prepared = load_scene(scene, spacing, seed=settings.seed,
-                          max_points=settings.max_scene_points, **options)
+    prepared = load_scene(scene, spacing, seed=settings.seed, **options)
     t_prep = time.perf_counter() - t0
     result = detect_many(prepared, [tensor], settings, progress, test_indices)[0]
     if prepared is not scene:

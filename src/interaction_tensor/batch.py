@@ -1,7 +1,7 @@
 """Many scenes x many descriptors, on Dask: one laptop or the cluster you already have.
 
 One task per scene: a worker loads and indexes the scene once and runs every descriptor on it
-in one pass (:func:`~interaction_tensor.detect.detect_many`, one pass per descriptor spacing).
+in one pass (:func:`~interaction_tensor.detection.search.detect_many`, one pass per descriptor spacing).
 Each (scene, descriptor) result is a folder ``OUT/<scene>/<descriptor>/`` built aside and
 swapped in, so a folder holding ``predictions.json`` is always complete: a crashed or killed
 batch loses no finished result, and running the same batch again skips what is done.
@@ -25,8 +25,8 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from .errors import InputError, SettingsError
-from .settings import DetectSettings
+from interaction_tensor.errors import InputError, SettingsError
+from interaction_tensor.settings import DetectSettings
 
 #: columns of summary.csv
 COLUMNS = ["scene", "descriptor", "affordance", "status", "predictions", "best_score",
@@ -112,9 +112,9 @@ def run_scene(job: dict) -> list[dict]:
     [(name, path)], outdir, settings (DetectSettings fields), scene_options, render,
     threads. Returns one summary row per descriptor.
     """
-    from .api import load_scene, load_tensor
-    from .detect import detect_many
-    from .errors import ItensorError
+    from interaction_tensor.api import load_scene, load_tensor
+    from interaction_tensor.detection.search import detect_many
+    from interaction_tensor.errors import ItensorError
 
     if job.get("threads"):
         try:
@@ -142,8 +142,7 @@ def run_scene(job: dict) -> list[dict]:
             groups.setdefault(spacing, []).append(item)
         for spacing, items in groups.items():
             t0 = time.perf_counter()
-            scene = load_scene(job["scene"], spacing, seed=settings.seed,
-                               max_points=settings.max_scene_points, **job["scene_options"])
+            scene = load_scene(job["scene"], spacing, seed=settings.seed, **job["scene_options"])
             t_prep = time.perf_counter() - t0
             dets = detect_many(scene, [t for _, _, t in items], settings)
             for (name, path, _), det in zip(items, dets):
@@ -241,7 +240,7 @@ def batch(scenes, tensors, outdir, settings: DetectSettings | None = None, *, cl
     """
     from dataclasses import fields, replace
 
-    from .descriptor import InteractionTensor
+    from interaction_tensor.descriptor.tensor import InteractionTensor
 
     t0 = time.perf_counter()
     outdir = Path(outdir)
@@ -262,7 +261,7 @@ def batch(scenes, tensors, outdir, settings: DetectSettings | None = None, *, cl
             desc_paths += expand_paths([t], "descriptors", suffixes=(".npz",))
     for p in desc_paths:        # refuse a bad descriptor now, not on every worker
         InteractionTensor.load(p)
-    from .api import CLEANING_OPTIONS
+    from interaction_tensor.api import CLEANING_OPTIONS
 
     allowed = {"scan", "normals", "color", "depth", "intrinsics", "depth_scale", "depth_trunc",
                "scale", "up", *CLEANING_OPTIONS}
@@ -372,7 +371,7 @@ def _progress(total: int, show: bool):
 # --------------------------------------------------------------------------- summary
 def write_summary(result: BatchResult) -> None:
     """``summary.csv``, ``summary.json`` and ``index.html`` in the batch's directory."""
-    from .io import atomic_path, write_json
+    from interaction_tensor.geometry.files import atomic_path, write_json
 
     out = result.outdir
     with atomic_path(out / "summary.csv") as tmp:

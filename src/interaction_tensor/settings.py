@@ -12,14 +12,14 @@ import numbers
 import re
 from dataclasses import asdict, dataclass, fields, replace
 
-from .errors import SettingsError
+from interaction_tensor.errors import SettingsError
 
 CRITERIA = ("paper", "gaussian")
 KEYPOINT_SETS = ("weighted", "uniform")
 BACKENDS = ("auto", "numba", "numpy", "torch")
-KEYPOINT_ORDERS = ("adaptive", "weight")
-COMPLETE_SCORES = ("accepted", "placed")
-STAGE_ORDERS = ("auto", "score-first", "tests-first")
+#: The placement tests, in the order detection runs them (``DetectSettings.skip_tests``).
+PLACEMENT_TESTS = ("clearance", "contact", "interior", "ground", "feet", "straddle", "mount",
+                   "through", "collision")
 #: Smallest sampling spacing (m): finer sampling grows memory as 1 / spacing^2 (a 1e-6 m
 #: spacing asked for gigabytes before any check), and no scan resolves below a millimetre.
 MIN_SPACING = 1e-3
@@ -145,7 +145,8 @@ class TrainSettings:
 
 @dataclass(frozen=True)
 class DetectSettings:
-    """How a scene is searched for places where a trained interaction can happen."""
+    """How a scene is searched for places where a trained interaction can happen: the
+    paper's parameters and the switches a user needs."""
 
     #: Fraction of scene points drawn at random as test points. Paper: 30 %.
     sample_fraction: float = 0.30
@@ -164,116 +165,21 @@ class DetectSettings:
     #: Paper criterion: theta_max = pi / 18 and c = 5 (paper, section 3.2).
     theta_max: float = math.pi / 18
     c: float = 5.0
-    #: Gaussian criterion: sigma = a (1 + w), accept when score > 0.5 (code).
+    #: Gaussian criterion: sigma = a (1 + w) (code).
     gaussian_a: float = 0.4
-    #: Acceptance threshold on the normalised score in [0, 1]. None: the descriptor's
-    #: calibrated threshold for the paper criterion, 0.5 for the gaussian one (code).
+    #: Acceptance threshold S_aff on the normalised score in [0, 1]. None: the descriptor's
+    #: own for the criterion (tuned per affordance, or calibrated on its example).
     threshold: float | None = None
     #: Which keypoint set to compare: ``weighted`` (paper) or ``uniform``.
     keypoints: str = "weighted"
-    #: Stop comparing a candidate as soon as its decision is known (paper, section 4.2.1).
-    early_exit: bool = True
-    #: Which pairs get a complete score (every keypoint), with ``early_exit``. ``placed``
-    #: (default): with ``stage_order`` tests-first, the pairs the score accepts, of those
-    #: that passed the tests (the only ones scored). With score-first, every pair stops at
-    #: its decision, accepted or rejected; the placement
-    #: tests run on the decisions, and only the pairs that pass them are scored again in
-    #: full. Their scores, the predictions and the heat map are bit for bit those of
-    #: ``accepted``; a pair the score accepted that fails a placement test keeps the partial
-    #: score of its decision, as a rejected pair does (``Detection.complete`` tells which
-    #: scores are whole). ``accepted``: every pair the score accepts is scored in full (the
-    #: behaviour before 2026-11-27; with the tuned placing descriptor 99.7 % of the pairs
-    #: are accepted by the score and only 38 % of them placed, benchmarks/RESULTS.md). The
-    #: Numba backend only: the reference and torch paths score accepted pairs in full.
-    complete_scores: str = "placed"
-    #: Which comes first, the score or the placement tests. ``tests-first``: every pair gets
-    #: the placement tests, and only the pairs that pass them are scored, stopping at a
-    #: rejection (an accepted pair is scored over every keypoint). The keypoints, their order
-    #: and the running sum are those of ``score-first``, so the decisions, the accepted
-    #: scores (bit for bit), the heat map and the predictions are the same; a pair that fails
-    #: a test is never scored (score 0, ``Detection.scored`` False) and its placement outcome
-    #: is known whatever its score; a ranking of such pairs (``detect.rank_pairs``) scores
-    #: them again, at most 50,000, so past that it can differ from score-first's. ``score-first``: every pair is scored to its decision and
-    #: the tests run on the pairs the score accepts (the only order before 2026-11-27).
-    #: ``auto`` (default): ``tests-first``, unless ``complete_scores`` is ``accepted`` or
-    #: ``early_exit`` is off, which ask for the scores of pairs whatever their tests. With
-    #: the tuned descriptors the score accepts nearly every pair and the tests reject most:
-    #: on kitchen3 at 30 % 16 % of the 8 examples' pairs pass the tests
-    #: (benchmarks/RESULTS.md).
-    stage_order: str = "auto"
-    #: Order in which keypoints are compared. ``weight`` (default): largest weight first (the
-    #: paper's, and the authors' code's). ``adaptive``: the cheapest order on a seeded pilot
-    #: of this scene's own pairs (:func:`~interaction_tensor.detect.pilot_order`: the weight
-    #: order or a blend of ordering for acceptance and for rejection per unit of modelled
-    #: lookup cost, whichever decides the pilot's pairs with the least search). Scores are
-    #: sums over keypoints, so the order never changes a decision, an accepted score (bit for
-    #: bit with the paper's criterion, to rounding with the gaussian one), the heat map or the
-    #: predictions (tested). It does change what depends on where the early exit stopped: a
-    #: rejected pair's partial score and every pair's ``decided_at``
-    #: (``comparisons_to_decision`` in predictions.json). Measured at 30 % with the neighbour
-    #: cache and the tuned descriptors (2026-11-27, benchmarks/RESULTS.md): 0.97x the weight
-    #: order's speed for placing-bowl on kitchen5, 1.00x on office-desk1, 1.05x for
-    #: sitting-human on office-desk5 (10-20 % fewer comparisons; the rest of the scoring
-    #: stage dominates). So it is not the default; ``itensor evaluate`` asks for ``weight``
-    #: itself.
-    keypoint_order: str = "weight"
-    #: Pairs fully scored to measure the adaptive order.
-    pilot_pairs: int = 256
-    #: Clearance test (when the descriptor has clearance points): an accepted pair must also
-    #: leave the query room, i.e. no scene sample nearer than ``r - tolerance`` to a clearance
-    #: point whose free space in the example was r (at most ``clearance_max``), at more than
-    #: ``clearance_max_violations`` (a fraction) of the clearance points; None: the
-    #: descriptor's own limit (tuned per affordance for the paper's examples, else
-    #: ``TrainSettings.clearance_limit``). A sample is never nearer than the surface it lies
-    #: on, so sampling cannot cause a violation; the tolerance only allows the scene a little
-    #: closer than the example (ours).
-    clearance: bool = True
-    clearance_tolerance: float = 0.005
-    clearance_max_violations: float | None = None
-    #: Contact test (when the descriptor has contact groups and its mode is not ``off``): the
-    #: parts that touched the example's scene-object must touch the scene again (ours; see
-    #: clearance.py).
-    contact: bool = True
-    #: Interior test (when the descriptor has interior points): no scene sample nearer than
-    #: ``depth - interior_tolerance`` to more than the descriptor's interior limit of them.
-    #: The 1 cm tolerance lets a person sink a centimetre into a soft seat (ours).
-    interior: bool = True
-    #: Ground test (when the descriptor has ``below_ground``): the posed query object no
-    #: deeper than that below the lowest scene sample within 1.5 m of it (a hanger hooked
-    #: round a chair's star base in a scan without its floor; ours).
-    ground: bool = True
-    #: Feet test (when the descriptor has ``feet_reach``): what stood on the example's ground
-    #: (a seated person's feet) finds a scene surface at most that far below it, or the
-    #: scene's ground (a person on a counter top with the feet in the air; ours).
-    feet: bool = True
-    #: Straddle test (when the descriptor has ``straddle``: riding): the scene goes on
-    #: between the legs ahead of the seat and leaves room for a leg on each side (a bench
-    #: crossed sideways, a wide seat or a bed fails; ours).
-    straddle: bool = True
-    #: Mount test (when the descriptor has ``mount_height``: riding): the seat no higher
-    #: than that above the scene's ground (no one climbs astride a 2.4 m wall; ours).
-    mount: bool = True
-    #: Through test (when the descriptor asks for it, ``InteractionTensor.through``: hanging):
-    #: scene samples cross the posed section of what went through the query in the example
-    #: (a rail through the hook), on every pair; the exact collision test asks the scene's
-    #: triangles the same of the pairs it ranks (ours).
-    through: bool = True
-    interior_tolerance: float = 0.01
-    #: Collision test (when the scene is a triangle mesh, ``Scene.mesh``, and the descriptor
-    #: has a collision depth): a placement that reaches the top k is moved into the scene
-    #: and its triangles tested against the scene's (python-fcl, exact, however thin the
-    #: parts); it is rejected when no move of the descriptor's ``collision_depth`` in one of
-    #: 26 directions frees it. The sampled placement tests miss a thin panel or a wall
-    #: through a seated person; this one does not. Only the placements that would enter the
-    #: top k are tested (a few milliseconds each), best first, at most
-    #: ``collision_max_tests`` per ranking; a placement left untested when they run out is
-    #: not predicted (ours). 2,000 (until 2026-11-26) left hanging with no prediction in 8 of
-    #: 12 small-scene runs: on office-desk4 the hanger's top 5 (on chair armrests, all valid)
-    #: took 5,889 tests (13 s, about 2 ms each: the rest are hooks through desk tops and
-    #: seats, where something does go through the hook), the handbag's two 26,989 (28 s); a
-    #: seated person's top 5 there took 1,143 (3 s): about 2 minutes when all are spent.
-    collision: bool = True
-    collision_max_tests: int = 50_000
+    #: Placement tests not to run, by name (:data:`PLACEMENT_TESTS`). Each runs where the
+    #: descriptor asks for it: clearance (the scene no nearer the object than in the
+    #: example), contact (what touched in the example touches again), interior (no scene
+    #: surface through the object), ground (not below the floor around it), feet (a seated
+    #: person's feet find a floor), straddle and mount (a rider astride, within reach of the
+    #: ground), through (something through a hook's loop) and collision (the ranked poses'
+    #: triangles against the scene's, where the scene has triangles).
+    skip_tests: tuple = ()
     #: Predictions kept after non-maximum suppression.
     top_k: int = 10
     #: Suppression radius (m) of the top-k; None: the query object's width (the larger side
@@ -281,20 +187,10 @@ class DetectSettings:
     nms_radius: float | None = None
     #: Spacing (m) at which mesh scenes are sampled; None: the descriptor's training spacing.
     scene_spacing: float | None = None
-    #: Hard cap on scene samples, to bound memory on huge meshes.
-    max_scene_points: int = 5_000_000
-    #: Candidates scored per batch (bounds memory; a progress-bar step).
-    batch_size: int = 4096
-    #: ``auto``: the Numba kernel when Numba imports, else ``numpy``; ``numpy`` is the plain
-    #: vectorised path over SciPy's cKDTree; ``torch``: PyTorch, on a CUDA device when one is
-    #: present (see ``device``), same decisions as the CPU paths.
+    #: ``auto``: the Numba kernels when Numba imports, else ``numpy``; ``numpy``: the plain
+    #: vectorised reference over SciPy's cKDTree; ``torch``: PyTorch, on a CUDA device when
+    #: one is present (see ``device``). Every backend makes the same decisions.
     backend: str = "auto"
-    #: Numba backend: answer nearest-neighbour queries from a cache of per-block candidate
-    #: lists on the scene's grid (exact: identical results). None (auto): when at least 10 %
-    #: of the scene's points are tested (the default 30 % is), and dropped when the search
-    #: ends; True: always, kept on the grid for later searches of the same scene (many
-    #: affordances, the evaluation); False: the grid search alone.
-    neighbour_cache: bool | None = None
     #: Torch device of the ``torch`` backend; None: ``cuda`` when present, else ``cpu``.
     device: str | None = None
     #: Seed of the test-point draw and of scene sampling.
@@ -302,7 +198,8 @@ class DetectSettings:
 
     def __post_init__(self):
         _check(0 < self.sample_fraction <= 1, "sample_fraction must be in (0, 1]")
-        _check(self.n_orientations >= 1, "n_orientations must be at least 1")
+        _check(isinstance(self.n_orientations, numbers.Integral)
+               and 1 <= self.n_orientations <= 360, "n_orientations must be in [1, 360]")
         _check(0 <= self.normal_tolerance_deg <= 180, "normal_tolerance_deg must be in [0, 180]")
         _check(self.criterion is None or self.criterion in CRITERIA,
                f"criterion must be one of {CRITERIA} (or None: by the kind of scene)")
@@ -311,14 +208,15 @@ class DetectSettings:
                "theta_max, c and gaussian_a must be positive")
         _check(self.threshold is None or 0 < self.threshold <= 1,
                "threshold must be in (0, 1]")
-        _check(self.top_k >= 0, "top_k must be non-negative")
-        _check(self.collision_max_tests >= 0, "collision_max_tests must be non-negative")
-        _check(self.clearance_tolerance >= 0,
-               "clearance_tolerance must be non-negative (metres)")
-        _check(self.clearance_max_violations is None or 0 <= self.clearance_max_violations <= 1,
-               "clearance_max_violations must be in [0, 1]")
-        _check(self.interior_tolerance >= 0,
-               "interior_tolerance must be non-negative (metres)")
+        _check(isinstance(self.skip_tests, (tuple, list, frozenset, set)),
+               "skip_tests must be a tuple of placement test names")
+        unknown = sorted(set(self.skip_tests) - set(PLACEMENT_TESTS))
+        _check(not unknown, f"skip_tests: unknown test{'s' if len(unknown) > 1 else ''} "
+                            f"{', '.join(map(str, unknown))}; known: {', '.join(PLACEMENT_TESTS)}")
+        object.__setattr__(self, "skip_tests", tuple(t for t in PLACEMENT_TESTS
+                                                     if t in set(self.skip_tests)))
+        _check(isinstance(self.top_k, numbers.Integral) and self.top_k >= 1,
+               "top_k must be a positive integer")
         _check(self.nms_radius is None or self.nms_radius >= 0, "nms_radius must be >= 0")
         _check(self.scene_spacing is None or (math.isfinite(self.scene_spacing) and
                                               MIN_SPACING <= self.scene_spacing <= 1.0),
@@ -332,29 +230,15 @@ class DetectSettings:
             re.fullmatch(r"auto|cpu|mps|cuda(:\d+)?", self.device)),
             f"device must be auto, cpu, mps, cuda or cuda:N, got {self.device!r}")
         _check_seed(self.seed)
-        _check(self.keypoint_order in KEYPOINT_ORDERS,
-               f"keypoint_order must be one of {KEYPOINT_ORDERS}")
-        _check(self.complete_scores in COMPLETE_SCORES,
-               f"complete_scores must be one of {COMPLETE_SCORES}")
-        _check(self.stage_order in STAGE_ORDERS, f"stage_order must be one of {STAGE_ORDERS}")
-        _check(not (self.stage_order == "tests-first" and self.complete_scores == "accepted"),
-               "stage_order 'tests-first' never scores a pair that fails a placement test, "
-               "so it cannot complete every pair the score accepts (complete_scores "
-               "'accepted'): use stage_order 'score-first' or 'auto'")
-        _check(self.pilot_pairs >= 1, "pilot_pairs must be at least 1")
-        _check(self.batch_size >= 1 and self.max_scene_points >= 100,
-               "batch_size and max_scene_points must be positive")
+
+    def runs(self, test: str) -> bool:
+        """Whether placement test ``test`` (:data:`PLACEMENT_TESTS`) may run."""
+        return test not in self.skip_tests
 
     def to_dict(self) -> dict:
-        return {f.name: getattr(self, f.name) for f in fields(self)}
-
-    @property
-    def tests_first(self) -> bool:
-        """Whether detection runs the placement tests before the score (``stage_order``,
-        ``auto`` resolved)."""
-        if self.stage_order == "auto":
-            return self.early_exit and self.complete_scores == "placed"
-        return self.stage_order == "tests-first"
+        d = {f.name: getattr(self, f.name) for f in fields(self)}
+        d["skip_tests"] = list(self.skip_tests)
+        return d
 
     def for_scene(self, scene) -> "DetectSettings":
         """These settings with the defaults that depend on the scene filled in: the criterion

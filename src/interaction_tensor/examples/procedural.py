@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..io import Geometry
+from interaction_tensor.geometry.core import Geometry
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Procedural objects of the paper's eight interaction examples, in metres, +Z up.
 
-Every function returns a :class:`~interaction_tensor.io.Geometry` mesh built from closed
+Every function returns a :class:`~interaction_tensor.geometry.core.Geometry` mesh built from closed
 primitives (boxes, cylinders, spheres and solids of revolution from ``trimesh.creation``).
 Pieces may overlap: each piece is watertight, so the union is a closed solid for the judge's
 voxel fill (``evaluation.judge``), although the concatenated mesh is not a manifold union.
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..io import Geometry
+from interaction_tensor.geometry.core import Geometry
 
 
 def _tm():
@@ -173,7 +173,7 @@ def riding_human() -> Geometry:
 # ------------------------------------------------------------------ scene-objects
 def table_mesh(size_xy=(1.0, 0.8), height: float = 0.75) -> Geometry:
     """A table with its top at ``height`` centred at the origin."""
-    from .procedural import parts_mesh, table
+    from interaction_tensor.examples.procedural import parts_mesh, table
 
     g = parts_mesh(table("table", (0.0, 0.0), size_xy, height))
     g.source = f"procedural table (top at {height} m)"

@@ -1,0 +1,169 @@
+"""What one detection run found: :class:`Detection`, with the top predictions as arrays and
+the outputs it writes.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from interaction_tensor.capture.outputs import write_input_frame_outputs
+from interaction_tensor.descriptor.tensor import InteractionTensor
+from interaction_tensor.engine.scoring import PairScores
+from interaction_tensor.geometry.files import atomic_dir
+from interaction_tensor.geometry.scene import Scene
+from interaction_tensor.outputs.export import OUTPUT_NAMES, export, result_open3d, result_scene
+from interaction_tensor.outputs.render import render_outdir
+from interaction_tensor.settings import DetectSettings
+
+
+@dataclass
+class Detection:
+    """Everything one detection run found.
+
+    Attributes
+    ----------
+    scene : the Scene searched
+    tensor : the descriptor used
+    settings : the DetectSettings used; ``threshold`` the threshold applied
+    test_indices : (T,) scene indices drawn as test points
+    candidate_indices : (C,) test points that passed the normal filter
+    pair_point, pair_orientation : (P,) scene index and orientation of every scored pair
+    pairs : PairScores of those pairs; ``pairs.accepted`` is the final decision (score and
+        placement tests)
+    score_accepted : (P,) bool, accepted by the score alone (False for a pair never scored:
+        ``DetectSettings.stage_order`` tests-first scores only the pairs that pass the
+        placement tests, see ``scored``)
+    clearance_violations : (P,) int16 (int32 past 32,767 clearance points), clearance points
+        violated (-1 where not tested: score-first, pairs the score rejected; or no
+        clearance test); on
+        the Numba backend counted up to the first past the limit (a pair that fails the
+        test holds the limit's count + 1)
+    placement : (P,) int8, the outcome of the placement tests (see the attribute)
+    heat : (N,) per scene point: best accepted score near it (0 where none)
+    accepted_count : (N,) accepted orientations at each scene point
+    predictions : top-k after suppression, best first
+    stats : counts and seconds per stage
+    """
+
+    scene: Scene
+    tensor: InteractionTensor
+    settings: DetectSettings
+    threshold: float
+    test_indices: np.ndarray
+    candidate_indices: np.ndarray
+    pair_point: np.ndarray
+    pair_orientation: np.ndarray
+    pairs: PairScores
+    heat: np.ndarray
+    accepted_count: np.ndarray
+    predictions: list = field(default_factory=list)
+    stats: dict = field(default_factory=dict)
+    score_accepted: np.ndarray | None = None
+    clearance_violations: np.ndarray | None = None
+    #: (N + 1,) the largest score keypoints k.. can still add, in the order they were
+    #: compared: ``score + rest[decided_at]`` bounds a rejected pair's full score
+    rest: np.ndarray | None = None
+    #: (P,) int8 outcome of the placement tests: -1 not tested (score-first: the score
+    #: rejected the pair; tests-first tests every pair), 0 placed, else the first test
+    #: failed (1 clearance, 2 contact, 3 interior, 4 collision, ...: :mod:`.clearance`; the
+    #: collision test runs on ranked pairs only)
+    placement: np.ndarray | None = None
+    #: the collision test of ranked pairs (:class:`~.ranking.CollisionCheck`), None until built
+    collisions: object = field(default=None, repr=False)
+    #: (P,) bool: pairs whose score covers every keypoint (the others hold the partial sum
+    #: at their decision); None: those the score accepted
+    complete: np.ndarray | None = None
+    #: (P,) bool: pairs that were scored at all (``DetectSettings.stage_order``
+    #: ``tests-first`` scores only the pairs that pass the placement tests; the others hold
+    #: score 0, decided at 0, and ``score_accepted`` False); None: every pair
+    scored: np.ndarray | None = None
+    #: how the search did its work (:class:`~.search.Engine`)
+    engine: object = field(default=None, repr=False)
+
+    @property
+    def accepted(self) -> np.ndarray:
+        """Indices into the pair arrays of accepted pairs (int32 when they fit)."""
+        return accepted_indices(self.pairs.accepted)
+
+    # ------------------------------------------------------------ the top predictions as arrays
+    @property
+    def positions(self) -> np.ndarray:
+        """(K, 3) test points of the top predictions, best first (metres)."""
+        return np.array([p.position for p in self.predictions], np.float64).reshape(-1, 3)
+
+    @property
+    def scores(self) -> np.ndarray:
+        """(K,) normalised scores of the top predictions, best first."""
+        return np.array([p.score for p in self.predictions], np.float64)
+
+    @property
+    def orientations(self) -> np.ndarray:
+        """(K,) angles (radians) about +Z of the top predictions."""
+        return np.array([p.angle for p in self.predictions], np.float64)
+
+    @property
+    def orientation_indices(self) -> np.ndarray:
+        """(K,) orientation indices i (angle = i * 2 pi / n_orientations)."""
+        return np.array([p.orientation_index for p in self.predictions], np.int64)
+
+    @property
+    def poses(self) -> np.ndarray:
+        """(K, 4, 4) rigid transforms of the training-frame query object into the scene."""
+        return np.array([p.pose for p in self.predictions], np.float64).reshape(-1, 4, 4)
+
+    def __repr__(self) -> str:
+        best = f", best {self.predictions[0].score:.3f}" if self.predictions else ""
+        return (f"<Detection {self.tensor.affordance!r} in {self.scene.source}: "
+                f"{len(self.predictions)} predictions{best}; {int(self.pairs.accepted.sum())} of "
+                f"{len(self.pair_point)} pairs accepted at threshold {self.threshold:.3f}>")
+
+    # ------------------------------------------------------------ outputs
+    def save(self, outdir, *, render: bool = False, scene_name: str | None = None,
+             descriptor_name: str | None = None, also: dict | None = None) -> Path:
+        """Write the result into ``outdir`` (what ``itensor detect -o`` writes), as one
+        transaction: built in a temporary sibling directory and swapped in, so ``outdir``
+        holds either the complete earlier result or the complete new one.
+
+        ``predictions.json``, ``heatmap.ply`` (score as ``quality`` and ``scalar_score``),
+        ``predictions.glb`` (scene heat map and posed objects, for browsers and Blender) and
+        ``top/``; for a captured scene also the same in the input's own frame; with
+        ``render`` also ``render.png``. ``also`` maps further file names to functions that
+        write them (given the path), inside the same transaction. An existing ``outdir`` must
+        be empty or hold an earlier result (and nothing else). Returns ``outdir`` as a Path.
+        """
+        outdir = Path(outdir)
+        t = time.perf_counter()
+        report = getattr(self.scene, "report", None)
+        also = dict(also or {})
+        with atomic_dir(outdir, "predictions.json", OUTPUT_NAMES + tuple(also)) as tmp:
+            for name, write in also.items():
+                write(tmp / name)
+            export(self, tmp, scene_name or (report.source if report is not None else None),
+                   descriptor_name)
+            if report is not None:
+                write_input_frame_outputs(self, tmp, report.transform, report)
+            self.stats["seconds"]["export"] = round(time.perf_counter() - t, 4)
+            if render:
+                render_outdir(tmp)
+        return outdir
+
+    def to_trimesh(self):
+        """A ``trimesh.Scene``: the scene points coloured by the heat map (grey: nothing
+        accepted near) and the query object posed at each top prediction."""
+        return result_scene(self)
+
+    def to_open3d(self) -> list:
+        """Open3D geometries: the heat-map point cloud, then one posed query per prediction
+        (``open3d.visualization.draw_geometries(result.to_open3d())``)."""
+        return result_open3d(self)
+
+
+def accepted_indices(accepted: np.ndarray) -> np.ndarray:
+    """Indices of the True entries of a per-pair mask, int32 when they fit (a 2 M-point scene
+    at 30 % accepts millions of pairs)."""
+    idx = np.flatnonzero(accepted)
+    return idx.astype(np.int32) if len(accepted) < 2 ** 31 else idx

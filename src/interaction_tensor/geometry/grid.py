@@ -1,0 +1,146 @@
+"""The scene's uniform grid: points sorted into cubic cells, for exact nearest-neighbour
+search by the Numba kernels (:mod:`interaction_tensor.engine.numba_backend`) and the
+placement tests.
+
+A grid costs its cell tables only when the points are already in cell order (a
+:class:`~interaction_tensor.geometry.scene.Scene` sorts them so): ``starts`` (8 bytes a cell),
+``seed`` (the nearest non-empty cell of each cell, 4 bytes) and the block occupancy ``occ``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+#: Block edge, in grid cells, of the grid's block occupancy (:attr:`Grid.occ`; also the
+#: cache builder's, :data:`CACHE_OCC_CELLS`). Compiled into the Numba kernels.
+FAR_BLOCK = 4
+
+
+#: A nearest-neighbour query whose seed sample is farther than this (grid cells) searches
+#: the occupied blocks of :attr:`Grid.occ` instead of every cell of the shells around it: a
+#: seated person's head, 1 m above a desk frame of 6 cm cells, visited ~20,000 empty cells
+#: per query (benchmarks/kernel_speed.py). Compiled into the Numba kernels.
+FAR_CELLS = 3.0
+
+
+#: Largest number of grid cells (dense start table, 8 bytes each).
+MAX_CELLS = 20_000_000
+
+
+@dataclass
+class Grid:
+    """Scene points sorted into a uniform grid of cubic cells.
+
+    Attributes
+    ----------
+    points, normals : (N, 3) float64 sorted by cell
+    order : (N,) int64, original index of each sorted point; None when the points were
+        already in cell order (the grid then shares the scene's arrays)
+    starts : (C + 1,) int32 (int64 beyond 2**31 points), points of cell c are
+        ``starts[c]:starts[c + 1]``
+    seed : (C,) int32, the non-empty cell whose centre is nearest to each cell's centre
+        (a search starts there; the nearest one, not merely a near one: a coarser table
+        of 4^3-cell blocks saved 3 bytes a cell and cost 12 % of kitchen5's scoring time)
+    origin : (3,) float64, corner of cell (0, 0, 0)
+    cell : float, cell edge (m)
+    dims : (3,) int64 cells per axis
+    occ : (ceil(nx / FAR_BLOCK) * ceil(ny / FAR_BLOCK) * ceil(nz / FAR_BLOCK),) int8, 1 where
+        a block of FAR_BLOCK^3 cells holds a point (the far queries' search, :func:`nearest`)
+    cache : the :class:`NeighbourCache` of :func:`score_jobs` (None until first used)
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    order: np.ndarray
+    starts: np.ndarray
+    seed: np.ndarray
+    origin: np.ndarray
+    cell: float
+    dims: np.ndarray
+    occ: np.ndarray = field(default=None, repr=False, compare=False)
+    cache: object = field(default=None, repr=False, compare=False)
+
+
+def grid_cells(points: np.ndarray, cell: float):
+    """(lin, lo, cell, dims): the linear cell index of each point in the grid of edge
+    ``cell`` (enlarged if the grid would have more than :data:`MAX_CELLS` cells); ``lin`` is
+    int32 when the cells fit, computed in blocks (no (N, 3) temporaries)."""
+    lo = points.min(axis=0) - 1e-9
+    extent = np.ptp(points, axis=0) + 2e-9
+    cell = float(max(cell, (np.prod(extent + cell) / MAX_CELLS) ** (1 / 3), 1e-6))
+    dims = np.maximum(np.ceil(extent / cell).astype(np.int64), 1)
+    lin = np.empty(len(points), np.int32 if np.prod(dims) < 2 ** 31 else np.int64)
+    for s in range(0, len(points), 1 << 18):
+        ijk = ((points[s:s + (1 << 18)] - lo) / cell).astype(np.int64)
+        np.minimum(ijk, dims - 1, out=ijk)
+        lin[s:s + (1 << 18)] = (ijk[:, 0] * dims[1] + ijk[:, 1]) * dims[2] + ijk[:, 2]
+    return lin, lo, cell, dims
+
+
+def build_grid(points: np.ndarray, normals: np.ndarray, cell: float) -> Grid:
+    """Sort ``points`` into cells of edge ``cell`` (enlarged if the grid would be too big).
+
+    Points already in cell order (a :class:`Scene` from :func:`prepare_scene`) are used as
+    they are, not copied: the grid then costs its cell tables only (8 bytes a cell)."""
+    lin, lo, cell, dims = grid_cells(points, cell)
+    if np.all(lin[1:] >= lin[:-1]):                # already in cell order: share the arrays
+        order = None
+        sorted_points, sorted_normals = points, normals
+    else:
+        order = np.argsort(lin, kind="stable")
+        sorted_points, sorted_normals = points[order], normals[order]
+        lin = lin[order]
+    n_cells = int(np.prod(dims))
+    # int32 cell starts when they fit: the dense table is the grid's largest part; found by
+    # bisection of the sorted cell indices, a block of cells at a time (no int64 counts)
+    starts = np.empty(n_cells + 1, np.int32 if len(points) < 2 ** 31 else np.int64)
+    for c in range(0, n_cells + 1, 1 << 20):
+        starts[c:c + (1 << 20)] = np.searchsorted(lin, np.arange(c, min(c + (1 << 20),
+                                                                       n_cells + 1)))
+    occupied = lin[np.r_[True, lin[1:] != lin[:-1]]] if len(lin) else lin
+    del lin
+    seed = _nearest_occupied(occupied, dims)
+    grid = Grid(np.ascontiguousarray(sorted_points), np.ascontiguousarray(sorted_normals),
+                order, starts, seed, lo, cell, dims)
+    grid.occ = _block_occupancy(grid, FAR_BLOCK)
+    return grid
+
+
+def _nearest_occupied(occupied: np.ndarray, dims: np.ndarray) -> np.ndarray:
+    """(C,) int32 linear index of the non-empty cell nearest to each cell (exact Euclidean
+    distance transform of the occupancy, SciPy), from the sorted non-empty cells; int32 in
+    place throughout (about 20 bytes a cell at its peak, 4 kept)."""
+    from scipy.ndimage import distance_transform_edt
+
+    n_cells = int(np.prod(dims))
+    if len(occupied) == n_cells:
+        return np.arange(n_cells, dtype=np.int32)
+    empty = np.ones(n_cells, bool)
+    empty[occupied] = False
+    ind = np.empty((3,) + tuple(int(d) for d in dims), np.int32)   # SciPy fills it in place
+    distance_transform_edt(empty.reshape(tuple(dims)), return_distances=False,
+                           return_indices=True, indices=ind)
+    del empty
+    # (i * ny + j) * nz + k in int32, in a copy: a view of ind[0] would keep all of ind
+    # (12 bytes a cell) alive for as long as the grid
+    lin = ind[0].reshape(-1).copy()
+    lin *= int(dims[1])
+    lin += ind[1].reshape(-1)
+    lin *= int(dims[2])
+    lin += ind[2].reshape(-1)
+    return lin
+
+
+def _block_occupancy(grid: Grid, cb: int) -> np.ndarray:
+    """(ceil(nx / cb) * ceil(ny / cb) * ceil(nz / cb),) int8: 1 where a block of cb^3 grid
+    cells holds a sample."""
+    nx, ny, nz = (int(v) for v in grid.dims)
+    full = (np.diff(grid.starts) > 0).reshape(nx, ny, nz)
+    mb = [-(-v // cb) for v in (nx, ny, nz)]
+    pad = np.zeros([v * cb for v in mb], bool)
+    pad[:nx, :ny, :nz] = full
+    occ = pad.reshape(mb[0], cb, mb[1], cb, mb[2], cb).any(axis=(1, 3, 5))
+    return np.ascontiguousarray(occ.ravel(), dtype=np.int8)

@@ -1,0 +1,173 @@
+"""Area-uniform surface sampling, point-cloud normals and keypoint sampling."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from interaction_tensor.errors import InputError
+from interaction_tensor.geometry.core import Geometry
+
+
+def mesh_area(geometry: Geometry) -> float:
+    """Surface area (m^2) of a mesh geometry."""
+    import trimesh
+
+    return float(trimesh.triangles.area(geometry.vertices[geometry.faces]).sum())
+
+
+def sample_mesh(geometry: Geometry, count: int, seed, face_mask=None):
+    """Area-uniform random samples on a mesh, with their face normals.
+
+    Parameters
+    ----------
+    geometry : a mesh Geometry
+    count : number of samples
+    seed : int or numpy Generator
+    face_mask : (F,) bool or None, restrict sampling to these faces
+
+    Returns
+    -------
+    points : (count, 3) float64, metres
+    normals : (count, 3) float64, unit face normals (orientation as the file's winding)
+    """
+    import trimesh
+
+    faces = geometry.faces if face_mask is None else geometry.faces[face_mask]
+    if len(faces) == 0 or not trimesh.triangles.area(geometry.vertices[faces]).sum() > 0:
+        raise InputError(geometry.source, "no surface to sample (zero area)")
+    mesh = trimesh.Trimesh(geometry.vertices, faces, process=False)
+    points, face_index = trimesh.sample.sample_surface(mesh, int(count), seed=seed)
+    normals = np.asarray(mesh.face_normals)[face_index]
+    return points, normals
+
+
+def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = None) -> np.ndarray:
+    """Unit normals of a point cloud by PCA of the ``k`` nearest neighbours.
+
+    The sign is chosen so that normals point to +Z where they are not horizontal
+    (normals of clouds are unoriented; callers that need a side use their own rule).
+
+    Returns (N, 3) float64.
+    """
+    points = np.asarray(points, dtype=np.float64)
+    k = int(min(k, len(points)))
+    tree = cKDTree(points) if tree is None else tree
+    normals = np.empty_like(points)
+    step = 50_000  # bounds the (step, k, 3) neighbourhood arrays (about 40 MB)
+    for start in range(0, len(points), step):
+        sl = slice(start, start + step)
+        _, idx = tree.query(points[sl], k=k, workers=-1)
+        nb = points[idx]
+        nb -= nb.mean(axis=1, keepdims=True)
+        cov = np.einsum("nki,nkj->nij", nb, nb)
+        _, vecs = np.linalg.eigh(cov)
+        normals[sl] = vecs[:, :, 0]
+    flip = normals[:, 2] < 0
+    normals[flip] *= -1
+    return normals
+
+
+def unique_rows(a: np.ndarray) -> np.ndarray:
+    """The distinct rows of a 2-D integer array in lexicographic order, as
+    ``np.unique(a, axis=0)`` gives them, about twice as fast (one lexsort, no void view)."""
+    if len(a) == 0:
+        return a.copy()
+    s = a[np.lexsort(a.T[::-1])]
+    return s[np.r_[True, np.any(s[1:] != s[:-1], axis=1)]]
+
+
+def mean_spacing(points: np.ndarray, tree: cKDTree | None = None, sample: int = 2000,
+                 seed: int = 0) -> float:
+    """Sampling spacing (m) of a surface point cloud: 1 / sqrt(points per square metre).
+
+    The same meaning as the spacing at which meshes are sampled (count = area / spacing^2).
+    The density is the median number of distinct neighbours within a disk of a few
+    nearest-neighbour distances, over a random subset of centres; duplicated points (common
+    in scans and converted clouds) do not count. Memory: the tree and the subset's
+    neighbourhoods, no copy of the cloud.
+    """
+    points = np.asarray(points, np.float64)
+    if len(points) < 3:
+        return 0.0
+    rng = np.random.default_rng(seed)
+    tree = cKDTree(points) if tree is None else tree
+    centres = points[rng.choice(len(points), size=min(sample, len(points)), replace=False)]
+    # nearest *distinct* neighbour (duplicates at distance 0 skipped) of each centre
+    d, _ = tree.query(centres, k=min(8, len(points)), workers=-1)
+    nn = np.where(d > 1e-6, d, np.inf).min(axis=1)
+    if not np.isfinite(nn).any():
+        return 0.0
+    radius = 8.0 * float(np.median(nn[np.isfinite(nn)]))
+    # distinct neighbours within the radius, counted without a copy of the whole cloud:
+    # (centre, micrometre cell) keys of the neighbours, made unique
+    lists = tree.query_ball_point(centres, radius, workers=-1)
+    lengths = np.fromiter((len(x) for x in lists), np.int64, len(lists))
+    near = np.fromiter((i for x in lists for i in x), np.int64, int(lengths.sum()))
+    keys = np.column_stack([np.repeat(np.arange(len(lists)), lengths),
+                            np.round(points[near] / 1e-6).astype(np.int64)])
+    counts = np.bincount(unique_rows(keys)[:, 0], minlength=len(lists))
+    density = np.median(counts) / (np.pi * radius ** 2)
+    return float(1.0 / np.sqrt(density)) if density > 0 else float(np.median(nn))
+
+
+def weighted_keypoints(weights: np.ndarray, n: int, seed) -> np.ndarray:
+    """Weight-driven keypoint indices: ``n`` draws without replacement with probability
+    proportional to ``weights`` (paper, eq. 3).
+
+    Points of zero weight are drawn only when fewer than ``n`` have a positive weight.
+    Returns (min(n, len(weights)),) int64 indices, unsorted.
+    """
+    weights = np.asarray(weights, dtype=np.float64)
+    n = min(int(n), len(weights))
+    rng = np.random.default_rng(seed)
+    positive = np.flatnonzero(weights > 0)
+    if len(positive) <= n:
+        rest = np.setdiff1d(np.arange(len(weights)), positive)
+        extra = rng.choice(rest, size=n - len(positive), replace=False)
+        return np.r_[positive, extra]
+    p = weights[positive] / weights[positive].sum()
+    return positive[rng.choice(len(positive), size=n, replace=False, p=p)]
+
+
+def uniform_keypoints(count: int, n: int, seed) -> np.ndarray:
+    """``n`` indices drawn uniformly without replacement from ``count`` points."""
+    rng = np.random.default_rng(seed)
+    return rng.choice(int(count), size=min(int(n), int(count)), replace=False)
+
+
+def winding_numbers(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Generalised winding number of each point with respect to a triangle mesh: the Numba
+    kernel when Numba imports, else :func:`winding_numbers_reference` (same formula)."""
+    from interaction_tensor.engine import numba_backend as kernels
+
+    if not kernels.available():
+        return winding_numbers_reference(points, vertices, faces)
+    from interaction_tensor.engine import _numba_kernels
+
+    tri = np.ascontiguousarray(np.asarray(vertices, np.float64)[np.asarray(faces, np.int64)])
+    return _numba_kernels.winding_numbers(np.ascontiguousarray(points, dtype=np.float64), tri)
+
+
+def winding_numbers_reference(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray,
+                              chunk: int = 2_000_000) -> np.ndarray:
+    """Generalised winding number of each point with respect to a triangle mesh (NumPy).
+
+    About 1 inside a closed, outward-wound mesh, 0 outside, 0.5 on its surface (Jacobson et
+    al. 2013: the sum of the triangles' signed solid angles over 4 pi, each from van
+    Oosterom & Strackee's formula). Exact for watertight meshes however thin their parts;
+    vectorised in blocks of about ``chunk`` (point, triangle) terms.
+    """
+    p = np.asarray(points, np.float64)
+    tri = np.asarray(vertices, np.float64)[np.asarray(faces, np.int64)]      # (F, 3, 3)
+    out = np.zeros(len(p))
+    step = max(1, chunk // max(len(tri), 1))
+    for s in range(0, len(p), step):
+        r = tri[None, :, :, :] - p[s:s + step, None, None, :]                  # (P, F, 3, 3)
+        a, b, c = r[:, :, 0], r[:, :, 1], r[:, :, 2]
+        la, lb, lc = (np.linalg.norm(x, axis=-1) for x in (a, b, c))
+        det = np.einsum("pfi,pfi->pf", a, np.cross(b, c))
+        den = (la * lb * lc + np.einsum("pfi,pfi->pf", a, b) * lc
+               + np.einsum("pfi,pfi->pf", b, c) * la + np.einsum("pfi,pfi->pf", c, a) * lb)
+        out[s:s + step] = np.arctan2(det, den).sum(axis=1) / (2 * np.pi)
+    return out

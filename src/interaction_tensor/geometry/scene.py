@@ -1,0 +1,318 @@
+"""Scene preparation: sampled points, normals and the nearest-neighbour index."""
+
+from __future__ import annotations
+
+import ctypes
+import sys
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from interaction_tensor.geometry.core import Geometry, validate_geometry
+from interaction_tensor.geometry.sampling import estimate_normals, mean_spacing, mesh_area, sample_mesh
+
+
+#: Grid cell edge of the Numba nearest-neighbour search, in scene spacings (fastest of
+#: 1, 2, 3, 4 on the demo room; see benchmarks/).
+GRID_CELL_FACTOR = 3.0
+
+
+@dataclass
+class Scene:
+    """A scene ready for detection.
+
+    Attributes
+    ----------
+    points : (N, 3) float64, metres, +Z up
+    normals : (N, 3) float64 unit normals (their sign may be arbitrary, see DetectSettings)
+    spacing : float, mean distance (m) between neighbouring points
+    source : str, where the scene came from
+    sampled : bool, True when the points were sampled from a mesh
+    captured : bool, True for captured data (an RGB-D frame, a scan): detection then defaults
+        to the ``gaussian`` criterion (see :meth:`DetectSettings.for_scene`)
+    report : for captured data, the :class:`~interaction_tensor.capture.RealSceneReport` of
+        its cleaning and alignment (the transform from the input frame); else None
+    notes : what loading changed that the user should know (the reader's notes)
+    mesh : the scene's triangles, (V, 3) float64 vertices (m) and (F, 3) int64 faces, which
+        detection's collision test uses (:meth:`collider`): the mesh it was sampled from, a
+        scanned mesh's own or an RGB-D frame's surface (:func:`~.realdata.depth_faces`), in
+        the scene's frame; None for point clouds
+    surface_noise : how far (m) the triangles of a captured surface stray from the surface
+        through its cleaned points (three robust standard deviations of the vertices'
+        distances along the points' normals, :func:`~.realdata.pipeline.surface_noise`);
+        detection's collision test allows it on top of each test's depth. 0 for meshes
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    spacing: float
+    source: str = "<array>"
+    sampled: bool = False
+    captured: bool = False
+    report: object = field(default=None, repr=False)
+    notes: list = field(default_factory=list, repr=False)
+    mesh: tuple | None = field(default=None, repr=False)
+    surface_noise: float = 0.0
+    _tree: cKDTree | None = field(default=None, repr=False)
+    _grid: object = field(default=None, repr=False)
+    _collider: object = field(default=None, repr=False)
+    _ground: object = field(default=None, repr=False)
+    _columns: object = field(default=None, repr=False)
+
+    @property
+    def tree(self) -> cKDTree:
+        """KD-tree over ``points`` (built on first use)."""
+        if self._tree is None:
+            self._tree = cKDTree(self.points)
+        return self._tree
+
+    def grid(self):
+        """Uniform grid over ``points`` for the Numba kernels (built on first use)."""
+        if self._grid is None:
+            from interaction_tensor.geometry.grid import build_grid
+
+            self._grid = build_grid(self.points, self.normals, GRID_CELL_FACTOR * self.spacing)
+        return self._grid
+
+    def collider(self):
+        """The scene's triangles as a :class:`~.collision.MeshCollider` (python-fcl; built on
+        first use), or None for a scene without a mesh."""
+        if self._collider is None and self.mesh is not None:
+            from interaction_tensor.geometry.collision import MeshCollider
+
+            self._collider = MeshCollider(*self.mesh)
+        return self._collider
+
+    def ground_level(self, points: np.ndarray, radius: float) -> np.ndarray:
+        """(N,) the lowest scene point within ``radius`` (m) of each of ``points`` (N, 3)
+        (:class:`GroundMap`, built on first use)."""
+        if self._ground is None:
+            self._ground = GroundMap(self.points)
+        return self._ground.level(points, radius)
+
+    def highest_under(self, xy: np.ndarray, limit: np.ndarray) -> np.ndarray:
+        """(P,) the highest scene sample one can stand on (its normal line within
+        :data:`STAND_ANGLE` of vertical) at most ``limit`` (P,) high in the 2 cm columns
+        under ``xy`` (P, G, 2) and their neighbours (:class:`ColumnIndex`, built on first
+        use); -inf where there is none."""
+        if self._columns is None:
+            flat = np.abs(self.normals[:, 2]) >= np.cos(np.radians(STAND_ANGLE))
+            self._columns = ColumnIndex(self.points[flat])
+        return self._columns.highest_under(xy, limit)
+
+    def __len__(self) -> int:
+        return len(self.points)
+
+
+#: Bytes a scene point costs ``detect`` at its defaults, with a margin (benchmarks/memory.py
+#: measures it); a scene needing more than the memory available is refused up front.
+BYTES_PER_POINT = 300
+
+
+class GroundMap:
+    """The ground around a place: the lowest of ``points`` (N, 3) per ``cell`` (m) column,
+    and :meth:`level`, the lowest within a square window of columns around a place. The floor,
+    or where a scan has no floor the lowest thing scanned around. Detection's ground test
+    and the judge's read it."""
+
+    def __init__(self, points: np.ndarray, cell: float = 0.1):
+        self.cell = float(cell)
+        ij = np.floor(points[:, :2] / self.cell).astype(np.int64)
+        self.origin = ij.min(axis=0)
+        ij -= self.origin
+        shape = tuple(int(v) for v in ij.max(axis=0) + 1)
+        low = np.full(shape[0] * shape[1], np.inf)
+        np.minimum.at(low, ij[:, 0] * shape[1] + ij[:, 1], points[:, 2])
+        self.low = low.reshape(shape)
+        self._filtered: dict = {}
+
+    def level(self, points: np.ndarray, radius: float) -> np.ndarray:
+        """(N,) the lowest point within ``radius`` (m, horizontally, rounded up to whole
+        columns) of each of ``points`` (N, 3); -inf where the window holds none. The map
+        filtered for a radius is built once."""
+        from scipy.ndimage import minimum_filter
+
+        r = int(np.ceil(radius / self.cell))
+        if r not in self._filtered:
+            padded = np.pad(self.low, r, constant_values=np.inf)
+            low = minimum_filter(padded, size=2 * r + 1, mode="constant", cval=np.inf)
+            self._filtered[r] = np.where(np.isfinite(low), low, -np.inf)
+        low = self._filtered[r]
+        c = np.floor(np.asarray(points, float).reshape(-1, 3)[:, :2] / self.cell).astype(
+            np.int64) - self.origin + r
+        inside = np.all((c >= 0) & (c < low.shape), axis=1)
+        out = np.full(len(c), -np.inf)
+        out[inside] = low[c[inside, 0], c[inside, 1]]
+        return out
+
+
+#: Steepest surface (degrees between its normal line and the vertical) a foot stands on: a
+#: floor, a step or a rail's top, not the face of a cabinet beside the shins (the judge's
+#: ``stand_angle``).
+STAND_ANGLE = 45.0
+
+
+class ColumnIndex:
+    """The scene's samples by vertical column of ``cell`` (m), each column's heights sorted:
+    what lies under a place (detection's feet test). Stored as one sorted array of integer
+    keys (column, then the height's rank among all heights), so a query is a binary search:
+    memory O(N) however large the scene's extent."""
+
+    def __init__(self, points: np.ndarray, cell: float = 0.02):
+        self.cell = float(cell)
+        points = np.asarray(points, float).reshape(-1, 3)
+        if len(points) == 0:                               # nothing: every query finds none
+            points = np.array([[0.0, 0.0, np.inf]])
+        ij = np.floor(points[:, :2] / self.cell).astype(np.int64)
+        self.origin = ij.min(axis=0) - 1                   # neighbours stay >= 0
+        ij -= self.origin
+        self.ny = int(ij[:, 1].max()) + 2
+        self.z = np.sort(np.asarray(points[:, 2], float))   # every height, ascending
+        rank = np.searchsorted(self.z, points[:, 2], side="left")
+        self.stride = len(self.z) + 1
+        self.code = np.sort((ij[:, 0] * self.ny + ij[:, 1]) * self.stride + rank)
+
+    def highest_under(self, xy: np.ndarray, limit: np.ndarray, chunk: int = 4096) -> np.ndarray:
+        """(P,) the highest sample at most ``limit`` (P,) high in the columns under ``xy``
+        (P, G, 2) and their 8 neighbours (a margin of at least one cell around each point);
+        -inf where there is none. Exact (tested against a brute-force search)."""
+        xy = np.asarray(xy, float)
+        limit = np.asarray(limit, float)
+        p = len(limit)
+        out = np.full(p, -np.inf)
+        if p == 0 or xy.shape[1] == 0:
+            return out
+        d = np.array([(a, b) for a in (-1, 0, 1) for b in (-1, 0, 1)], np.int64)
+        chunk = max(1, chunk * 9 // len(d) // max(1, xy.shape[1] // 64))
+        for s in range(0, p, chunk):
+            c = np.floor(xy[s:s + chunk] / self.cell).astype(np.int64) - self.origin
+            c = (c[:, :, None, :] + d).reshape(len(c), -1, 2)           # (p, 9G, 2)
+            ok = (c[..., 0] >= 0) & (c[..., 1] >= 0) & (c[..., 1] < self.ny)
+            key = c[..., 0] * self.ny + c[..., 1]
+            # the largest height rank <= limit, then the last code at or below (key, rank)
+            r = np.searchsorted(self.z, limit[s:s + chunk], side="right") - 1
+            want = key * self.stride + r[:, None]
+            at = np.searchsorted(self.code, want, side="right") - 1
+            hit = ok & (r[:, None] >= 0) & (at >= 0)
+            at = np.maximum(at, 0)
+            hit &= self.code[at] // self.stride == key
+            z = np.where(hit, self.z[self.code[at] % self.stride], -np.inf)
+            out[s:s + chunk] = z.max(axis=1)
+        return out
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation (Linux ``MemAvailable``, or the cgroup
+    limit a container sets when it is lower); None where it cannot be read."""
+    avail = None
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    avail = int(line.split()[1]) * 1024
+                    break
+    except OSError:
+        return None
+    for limit_file, usage_file in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+                                   ("/sys/fs/cgroup/memory/memory.limit_in_bytes",
+                                    "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+        try:
+            limit = open(limit_file).read().strip()
+            if limit.isdigit() and int(limit) < 2 ** 60:
+                free = int(limit) - int(open(usage_file).read().strip())
+                avail = free if avail is None else min(avail, free)
+            break
+        except (OSError, ValueError):
+            continue
+    return avail
+
+
+def check_memory(n_points: int, source, available: int | None = None) -> None:
+    """Refuse, before any work, a scene of ``n_points`` that would need more memory than is
+    available (:data:`BYTES_PER_POINT` each): one clear line instead of an OOM kill."""
+    from interaction_tensor.errors import InputError
+
+    available = available_memory() if available is None else available
+    need = int(n_points) * BYTES_PER_POINT
+    if available is not None and need > available:
+        raise InputError(source, f"{n_points:,} scene points need about {need / 2**30:.1f} GB "
+                                 f"and {available / 2**30:.1f} GB is available; sample fewer "
+                                 "(a coarser --spacing for a mesh, --voxel-size with --scan for "
+                                 "a cloud) or use a machine with more memory")
+
+
+#: Linux's transparent huge page size and madvise's MADV_HUGEPAGE.
+HUGE_PAGE = 2 << 20
+_MADV_HUGEPAGE = 14
+
+
+def hot_copy(a: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """``a[order]`` in memory that Linux may back with 2 MB (transparent huge) pages: the
+    scene's points and normals, which every nearest-neighbour query reads at random (5 % of
+    kitchen5's scoring time with 4 kB pages). NumPy asks for huge pages under every array
+    of 4 MB or more; the command line turns that off (:func:`cli._one_shot_memory`: with
+    them a 2 M-point detection peaked at 488-622 MB from run to run, without them at
+    475 MB every time), so they are asked for here only, for arrays filled whole."""
+    out = np.empty((len(order),) + a.shape[1:], a.dtype)
+    if out.nbytes >= 2 * HUGE_PAGE and sys.platform.startswith("linux"):
+        start = out.ctypes.data
+        lo = -(-start // HUGE_PAGE) * HUGE_PAGE
+        hi = (start + out.nbytes) // HUGE_PAGE * HUGE_PAGE
+        try:
+            ctypes.CDLL(None).madvise(ctypes.c_void_p(lo), ctypes.c_size_t(hi - lo),
+                                      _MADV_HUGEPAGE)
+        except (OSError, AttributeError):
+            pass
+    np.take(a, order, axis=0, out=out)
+    return out
+
+
+def spatially_sorted(points: np.ndarray, normals: np.ndarray, spacing: float):
+    """``points`` and ``normals`` reordered cell by cell as :meth:`Scene.grid` sorts them, so
+    that the grid shares the scene's arrays instead of copying them (48 bytes a point) and
+    neighbouring points lie near each other in memory."""
+    from interaction_tensor.geometry.grid import grid_cells
+
+    lin, *_ = grid_cells(points, GRID_CELL_FACTOR * spacing)
+    order = np.argsort(lin, kind="stable")
+    del lin
+    return hot_copy(points, order), hot_copy(normals, order)
+
+
+def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
+                  max_points: int = 5_000_000, face_mask=None) -> Scene:
+    """Turn a mesh or a point cloud into a :class:`Scene`.
+
+    Meshes are sampled area-uniformly at ``spacing`` (m): count = area / spacing^2, at most
+    ``max_points``; the scene keeps the mesh (``Scene.mesh``) for detection's collision
+    test. Point clouds are used as they are; their normals are estimated by PCA when the
+    file had none.
+    """
+    validate_geometry(geometry)
+    if geometry.is_mesh:
+        area = mesh_area(geometry) if face_mask is None else mesh_area(
+            Geometry(geometry.vertices, geometry.faces[face_mask]))
+        count = int(np.clip(round(area / spacing ** 2), 100, max_points))
+        check_memory(count, geometry.source)
+        points, normals = spatially_sorted(*sample_mesh(geometry, count, seed,
+                                                        face_mask=face_mask), spacing)
+        return Scene(points, normals, spacing, geometry.source, sampled=True,
+                     notes=list(geometry.notes),
+                     mesh=(np.asarray(geometry.vertices, np.float64),
+                           np.asarray(geometry.faces, np.int64)))
+    points = geometry.vertices
+    check_memory(len(points), geometry.source)
+    tree = cKDTree(points)
+    normals = geometry.normals
+    if normals is None or len(normals) != len(points):
+        normals = estimate_normals(points, tree=tree)
+    else:
+        length = np.linalg.norm(normals, axis=1, keepdims=True)
+        normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+    # the tree is not kept: the default (Numba) backend searches its own grid, and a
+    # cKDTree costs 32 bytes a point (rebuilt on first use by the other paths)
+    spacing = mean_spacing(points, tree)
+    del tree
+    points, normals = spatially_sorted(points, normals, spacing)
+    return Scene(points, normals, spacing, geometry.source, False, notes=list(geometry.notes))
