@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 
 import interaction_tensor as it
-from interaction_tensor.placement.checks import clearance_offsets, count_violations
 from interaction_tensor import affordances
+from interaction_tensor.placement.checks import clearance_offsets, count_violations
 
 ROOT = Path(__file__).resolve().parents[1]
 

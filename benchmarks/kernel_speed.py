@@ -48,8 +48,8 @@ CASES = {"kitchen5": "placing-bowl", "living-room4": "sitting-human"}
 def build_case(scene_name: str, interaction: str, fraction: float, n_candidates: int, seed: int):
     """(scene, grid, tensor, candidate scene indices) of one case."""
     import interaction_tensor as it
-    from interaction_tensor.detection.search import _test_points, candidate_mask
     from interaction_tensor import affordances
+    from interaction_tensor.detection.search import _test_points, candidate_mask
 
     tensor = affordances.build_descriptor(interaction, objects_dir=DATA / "objects",
                                            spacing=0.01)

@@ -26,7 +26,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from _protocol import protocol_descriptors, published_scene
 
 HERE = Path(__file__).resolve().parent

@@ -44,8 +44,8 @@ def main(argv=None) -> int:
     from scipy.spatial import cKDTree
 
     import interaction_tensor as it
-    from interaction_tensor.engine import numba_backend as kernels
     from interaction_tensor import affordances
+    from interaction_tensor.engine import numba_backend as kernels
 
     numba.set_num_threads(1)
     tensors = {ex: affordances.build_descriptor(ex, objects_dir=DATA / "objects", spacing=0.01)

@@ -94,8 +94,8 @@ def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
     order, the neighbour cache at 30 %), in the adaptive order, and through the grid search
     alone (weight order); then the exact reference on a candidate subset."""
     import interaction_tensor as it
-    from interaction_tensor.engine.scoring import score_pairs_exact
     from interaction_tensor.engine.numba_backend import score_pairs_numba
+    from interaction_tensor.engine.scoring import score_pairs_exact
 
     bowl, tbl = _paper_bowl_tensor()
     tensor = it.InteractionTensor.fit(bowl, tbl, "placing-bowl", it.TrainSettings())
@@ -166,8 +166,7 @@ def case_detect(scene_name: str, fraction: float, n_ref: int) -> dict:
     s_c, acc_c, _, _ = score_pairs_numba(scene.points[pp], po, table, scene.grid(), a.threshold,
                                          tensor.vectors, scene.spacing, cache=True)
     scene.grid().cache = None
-    from interaction_tensor.detection.places import suppression_radius
-    from interaction_tensor.detection.places import top_k
+    from interaction_tensor.detection.places import suppression_radius, top_k
 
     def top(score, accepted):
         idx = np.flatnonzero(accepted)
@@ -211,10 +210,13 @@ def case_sitting(scene_name: str, fraction: float, n_patch: int, rounds: int, fu
     the detection's test-point density), interleaved, outputs compared bit for bit; with
     ``full``, the whole detection at the defaults as well."""
     import interaction_tensor as it
-    from interaction_tensor.engine import numba_backend as kernels
-    from interaction_tensor.detection.search import (_test_points, candidate_mask,
-                                           resolve_threshold)
     from interaction_tensor import affordances
+    from interaction_tensor.detection.search import (
+        _test_points,
+        candidate_mask,
+        resolve_threshold,
+    )
+    from interaction_tensor.engine import numba_backend as kernels
 
     tensor = affordances.build_descriptor("sitting-human", objects_dir=DATA / "objects",
                                            spacing=0.01)
@@ -238,7 +240,10 @@ def case_sitting(scene_name: str, fraction: float, n_patch: int, rounds: int, fu
                                          job.threshold, job.vectors, job.rho)], grid, False)
     kernels.score_jobs([kernels.ScoreJob(job.points[:64], job.orient[:64], job.table,
                                          job.threshold, job.vectors, job.rho)], grid, True)
-    from interaction_tensor.engine.backends import CACHE_AUTO_BYTES_PER_POINT, CACHE_AUTO_FLOOR
+    from interaction_tensor.engine.backends import (
+        CACHE_AUTO_BYTES_PER_POINT,
+        CACHE_AUTO_FLOOR,
+    )
 
     auto_budget = min(kernels.CACHE_BYTES,
                       max(CACHE_AUTO_FLOOR, CACHE_AUTO_BYTES_PER_POINT * len(scene)))

@@ -8,6 +8,7 @@ import pytest
 from hypothesis import settings as _hypothesis_settings
 
 import interaction_tensor as it
+from interaction_tensor.cli.main import main
 
 # Property-based tests: a fixed-seed sample by default (CI and local runs draw the same
 # cases, so a failure reproduces); HYPOTHESIS_PROFILE=explore draws new, and more, cases.
@@ -29,7 +30,6 @@ def corner_tensor():
 @pytest.fixture(scope="session")
 def demo_run(tmp_path_factory):
     """The built-in demo, run once through the real CLI entry point."""
-    from interaction_tensor.cli.main import main
 
     out = tmp_path_factory.mktemp("demo")
     code = main(["demo", "-o", str(out), "--quiet"])

@@ -11,6 +11,8 @@ import pytest
 import trimesh
 
 import interaction_tensor as it
+from interaction_tensor.affordances import acceptance
+from interaction_tensor.cli.main import main
 from interaction_tensor.examples import demo
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.geometry.files import write_mesh
@@ -131,13 +133,11 @@ def test_train_takes_objects_too(files, tensor):
     assert np.allclose(t2.reference_point, tensor.reference_point)
     assert t2.threshold() == pytest.approx(tensor.threshold())
     sitting = it.train(q, files / "table.ply", "x", spacing=SPACING, acceptance="sitting")
-    from interaction_tensor.affordances import acceptance
 
     assert sitting.threshold() == pytest.approx(acceptance("sitting")["threshold"])
 
 
 def test_python_and_cli_give_the_same_result(files, tensor, tmp_path):
-    from interaction_tensor.cli.main import main
 
     desc = tensor.save(tmp_path / "bowl.npz")
     assert main(["detect", str(files / "kitchen.ply"), str(desc), "-o", str(tmp_path / "cli"),
@@ -199,7 +199,6 @@ def test_degenerate_inputs_and_runaway_work_are_refused_up_front(tensor):
 
 
 def test_units_are_checked_and_training_inputs_make_sense(files, tmp_path):
-    from interaction_tensor.examples.procedural import box_part, parts_mesh
 
     ex = demo.build()
     # the bowl and the table in millimetres: refused as objects, accepted with the scale

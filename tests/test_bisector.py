@@ -1,7 +1,11 @@
 import numpy as np
 
-from interaction_tensor.descriptor.bisector import (bisector_points, bisector_points_voronoi,
-                                         circumcentres, trim_to_sphere)
+from interaction_tensor.descriptor.bisector import (
+    bisector_points,
+    bisector_points_voronoi,
+    circumcentres,
+    trim_to_sphere,
+)
 
 
 def random_plane(n, z, half, rng):

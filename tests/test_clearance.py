@@ -6,19 +6,30 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
-from interaction_tensor.detection.search import Engine, detect
-from interaction_tensor.placement.checks import clearance_offsets, nearest_distance_function, violations
-from interaction_tensor.detection.ranking import full_scores, rank_pairs
-from interaction_tensor.examples.procedural import box_part, parts_mesh, table
+from interaction_tensor.affordances import acceptances
+from interaction_tensor.cli.main import main
 from interaction_tensor.detection.places import top_k
+from interaction_tensor.detection.ranking import full_scores, rank_pairs
+from interaction_tensor.detection.search import Engine, detect
 from interaction_tensor.engine.scoring import score_pairs_exact
+from interaction_tensor.examples import demo
+from interaction_tensor.examples.procedural import box_part, parts_mesh, table
+from interaction_tensor.geometry.files import write_mesh
+from interaction_tensor.placement.checks import (
+    FAILS_CLEARANCE,
+    FAILS_COLLISION,
+    PLACED,
+    UNTESTED,
+    clearance_offsets,
+    nearest_distance_function,
+    violations,
+)
 
 from support import corner_example
 
 
 @pytest.fixture(scope="module")
 def bowl():
-    from interaction_tensor.examples import demo
 
     q, s = demo.training_example()
     return it.InteractionTensor.fit(q, s, "placing-bowl", it.TrainSettings(scene_spacing=0.02))
@@ -85,7 +96,6 @@ def test_detection_rejects_accepted_pairs_that_violate_clearance():
 
 
 def test_rank_pairs_is_the_exact_best_and_worst_by_full_score(bowl):
-    from interaction_tensor.examples import demo
 
     room = it.prepare_scene(demo.build().scene, 0.02, seed=0)
     det = it.detect(room, bowl, it.DetectSettings(sample_fraction=0.01, threshold=0.9))
@@ -108,7 +118,6 @@ def test_rank_pairs_is_the_exact_best_and_worst_by_full_score(bowl):
 def test_rank_pairs_finds_the_best_rejected_pairs_when_nothing_is_accepted(bowl):
     """Every pair rejected: all bounds equal the threshold, so only the partial scores say
     which pairs to score again first; a fifth of them scored finds the exact best."""
-    from interaction_tensor.examples import demo
 
     room = it.prepare_scene(demo.build().scene, 0.02, seed=0)
     det = it.detect(room, bowl, it.DetectSettings(sample_fraction=0.02, threshold=0.95))
@@ -128,8 +137,6 @@ def test_rank_pairs_reaches_placed_pairs_below_many_better_scored_failures(bowl)
     hooks through furniture do): the pairs that pass rank first however few evaluations
     are allowed, since an accepted pair's key is known without scoring it again (scored
     in score order, 64 evaluations reached only the failures)."""
-    from interaction_tensor.placement.checks import FAILS_CLEARANCE
-    from interaction_tensor.examples import demo
 
     room = it.prepare_scene(demo.build().scene, 0.02, seed=0)
     det = it.detect(room, bowl, it.DetectSettings(sample_fraction=0.02, threshold=0.5,
@@ -156,8 +163,6 @@ def test_testing_first_changes_only_the_work(bowl, threshold):
     heat map, predictions and rankings as score-first with every accepted pair completed;
     the same outcome of the tests wherever score-first ran them; the pairs it scored hold
     the very scores and decisions score-first gave them; the others were never compared."""
-    from interaction_tensor.placement.checks import FAILS_COLLISION, PLACED, UNTESTED
-    from interaction_tensor.examples import demo
 
     room = it.prepare_scene(demo.build().scene, 0.02, seed=0)
 
@@ -214,7 +219,6 @@ class _FakeCheck:
 @pytest.fixture
 def corner_files(tmp_path):
     """The corner example written as q.ply (the box) and s.ply (floor and walls)."""
-    from interaction_tensor.geometry.files import write_mesh
 
     q, s = corner_example()
     write_mesh(tmp_path / "q.ply", q.vertices, q.faces)
@@ -223,8 +227,6 @@ def corner_files(tmp_path):
 
 
 def test_train_with_a_tuned_acceptance_and_detect_without_clearance(corner_files):
-    from interaction_tensor.cli.main import main
-    from interaction_tensor.affordances import acceptances
     ACCEPTANCE = acceptances()
 
     tmp_path = corner_files
@@ -255,7 +257,6 @@ def test_train_with_a_tuned_acceptance_and_detect_without_clearance(corner_files
 
 
 def test_train_with_a_ground_and_refuse_one_above_the_query(corner_files, capsys):
-    from interaction_tensor.cli.main import main
 
     tmp_path = corner_files
     out = tmp_path / "t.npz"

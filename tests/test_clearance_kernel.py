@@ -5,9 +5,18 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from interaction_tensor.placement.checks import clearance_offsets, count_violations, violations, \
-    nearest_distance_function
+import interaction_tensor as it
+from interaction_tensor import affordances
 from interaction_tensor.engine.numba_backend import available
+from interaction_tensor.geometry.grid import build_grid
+from interaction_tensor.placement.checks import (
+    clearance_offsets,
+    contact_fractions,
+    count_violations,
+    nearest_distance_function,
+    seat_fractions,
+    violations,
+)
 
 pytestmark = pytest.mark.skipif(not available(), reason="needs Numba")
 
@@ -22,7 +31,6 @@ class _Scene:
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_kernel_equals_reference_on_clutter(seed):
-    from interaction_tensor.geometry.grid import build_grid
 
     rng = np.random.default_rng(seed)
     # a floor, a box top and scattered clutter, 1 cm-ish spacing
@@ -52,8 +60,6 @@ def test_kernel_equals_reference_on_clutter(seed):
 
 def test_kernel_equals_reference_on_a_descriptor():
     """The placing example's own clearance points over a procedural room."""
-    import interaction_tensor as it
-    from interaction_tensor import affordances
 
     tensor = affordances.build_descriptor("placing-bowl", seed=0, spacing=0.02)
     room = it.prepare_scene(affordances.build("placing-bowl").scene_object, 0.01, seed=0)
@@ -74,9 +80,9 @@ def test_bounded_nearest_answers_within_as_the_exact_nearest(seed):
     """``d <= r`` of the bounded search equals that of the exact nearest distance for every
     r in [lo, hi], on clutter, for queries at surfaces, in the air, outside the grid and on
     the samples themselves (distance 0)."""
-    from interaction_tensor.placement._kernels import nearest_within
-    from interaction_tensor.geometry.grid import build_grid
     from scipy.spatial import cKDTree
+
+    from interaction_tensor.placement._kernels import nearest_within
 
     rng = np.random.default_rng(seed)
     floor = np.c_[rng.uniform(0, 1, (20000, 2)), np.zeros(20000)]
@@ -103,9 +109,6 @@ def test_contact_and_seat_fractions_on_the_grid_equal_the_reference():
     """The placement tests' contact and seat fractions through the bounded search equal
     those of the cKDTree's nearest samples, for the sitting and riding examples' pairs in a
     procedural room (touching, near and in the air)."""
-    import interaction_tensor as it
-    from interaction_tensor.placement.checks import contact_fractions, seat_fractions
-    from interaction_tensor import affordances
 
     room = it.prepare_scene(affordances.build("sitting-human").scene_object, 0.01, seed=0)
     rng = np.random.default_rng(3)

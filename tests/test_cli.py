@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
-
+from interaction_tensor.cli.main import build_parser, main
 from interaction_tensor.geometry.files import write_mesh, write_ply_points
 
 from support import corner_example
@@ -142,7 +142,6 @@ def test_detect_on_an_rgbd_frame_directory(files, descriptor, tmp_path):
 def _all_actions():
     import argparse
 
-    from interaction_tensor.cli.main import build_parser
 
     def walk(parser, name):
         for a in parser._actions:
@@ -167,7 +166,6 @@ def test_every_option_has_help_and_shows_its_default():
 
 
 def test_detect_json_summary_and_unwritable_outputs(tmp_path, capsys):
-    from interaction_tensor.cli.main import main
 
     from support import corner_example
 

@@ -17,17 +17,23 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import interaction_tensor as it
-from interaction_tensor.detection.search import Engine, detect
-from interaction_tensor.placement.checks import FAILS_COLLISION
-from interaction_tensor.geometry import collision
-from interaction_tensor.geometry.collision import Body, MeshCollider
-from interaction_tensor.geometry.collision import polygon as collision_polygon
-from interaction_tensor.detection.ranking import CollisionCheck, rank_pairs
-from interaction_tensor.detection.places import suppression_radius
-from interaction_tensor.errors import InputError
 from interaction_tensor import affordances
+from interaction_tensor.descriptor.tensor import through_section_of
+from interaction_tensor.detection.places import suppression_radius, top_k
+from interaction_tensor.detection.ranking import CollisionCheck, rank_pairs
+from interaction_tensor.detection.search import Engine, detect
+from interaction_tensor.errors import InputError
 from interaction_tensor.examples.procedural import box_part, parts_mesh
-from interaction_tensor.detection.places import top_k
+from interaction_tensor.geometry import collision
+from interaction_tensor.geometry.collision import Body, MeshCollider, through_section
+from interaction_tensor.geometry.collision import polygon as collision_polygon
+from interaction_tensor.placement.checks import (
+    FAILS_COLLISION,
+    FAILS_GROUND,
+    below_ground,
+    check_placements,
+    through_crossed_poses,
+)
 
 from support import descriptor_with_header
 
@@ -211,8 +217,6 @@ def test_a_hook_pushed_up_into_a_board_underside_has_nothing_through_it(hanging)
     the board, the hanger hanging free below: scans' wall cabinets and seat undersides) only
     grazes the opening: neither the exact nor the sampled through test passes it, while the
     rail still passes both. Without the section's top band, both passed it."""
-    from interaction_tensor.placement.checks import through_crossed_poses
-    from interaction_tensor.descriptor.tensor import through_section_of
 
     ex, tensor = hanging
     apex = float(ex.support_point[2])
@@ -257,7 +261,6 @@ def test_suppression_with_a_test_picks_as_suppression_over_what_passes(seed, k, 
 
 
 def test_the_through_section_is_empty_where_nothing_passes_through_the_query():
-    from interaction_tensor.geometry.collision import through_section
 
     rng = np.random.default_rng(3)
     ball = rng.normal(size=(400, 3))
@@ -309,7 +312,6 @@ def test_a_hanger_hooked_below_the_floor_line_fails_the_ground_test(hanging):
     and a high rail. A hanger hooked on the low bar reaches below that lowest point and fails
     the ground test (the judge's hook round a chair's star base); on the high rail it passes;
     with the test off the low bar passes too."""
-    from interaction_tensor.placement.checks import FAILS_GROUND, below_ground, check_placements
 
     ex, tensor = hanging
     drop = float(tensor.reference_point[2] - tensor.query_vertices[:, 2].min())

@@ -4,8 +4,12 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
-from interaction_tensor.geometry.sampling import (mean_spacing, uniform_keypoints, unique_rows,
-                                         weighted_keypoints)
+from interaction_tensor.geometry.sampling import (
+    mean_spacing,
+    uniform_keypoints,
+    unique_rows,
+    weighted_keypoints,
+)
 
 from support import plane
 

@@ -12,7 +12,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import interaction_tensor as it
+from interaction_tensor import affordances
 from interaction_tensor.descriptor.tensor import _ARRAYS
+from interaction_tensor.errors import InputError
 
 from support import corner_example
 
@@ -189,8 +191,6 @@ def test_a_height_setting_survives_a_file_and_a_bad_one_is_refused(
     """The feet and mount tests' heights (m): set, saved, loaded, switched off; out of range
     or of the wrong type refused when set and when read from a file; absent from an older
     file, the test is off."""
-    from interaction_tensor.errors import InputError
-    from interaction_tensor import affordances
 
     from support import descriptor_with_header
 

@@ -4,11 +4,20 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
-from interaction_tensor.detection.search import Engine, candidate_mask, detect
-from interaction_tensor.examples.procedural import box_part, parts_mesh
-from interaction_tensor.geometry.grid import build_grid
-from interaction_tensor.engine.numba_backend import nearest_indices
+from interaction_tensor.cli import main as cli
+from interaction_tensor.detection.places import top_k
+from interaction_tensor.detection.search import (
+    Engine,
+    candidate_mask,
+    candidates,
+    detect,
+)
+from interaction_tensor.engine.numba_backend import nearest_indices, score_pairs_numba
 from interaction_tensor.engine.scoring import score_pairs, score_pairs_exact
+from interaction_tensor.engine.torch_backend import TorchIndex, score_pairs_torch
+from interaction_tensor.examples.procedural import box_part, parts_mesh
+from interaction_tensor.geometry.grid import FAR_BLOCK, FAR_CELLS, build_grid
+from interaction_tensor.geometry.scene import hot_copy
 
 from support import corner_example
 
@@ -64,7 +73,6 @@ def test_candidates_without_scoring_are_detections_candidates(corner_tensor):
     the same seeded draw and normal filter as a detection, for either N_aff."""
     from dataclasses import replace
 
-    from interaction_tensor.detection.search import candidates
 
     scene_geometry, _ = moved_corner_scene(0.3, np.array([0.0, 0.0, 0.0]))
     scene = it.prepare_scene(scene_geometry, 0.01, seed=5)
@@ -104,7 +112,6 @@ def test_early_exit_and_numba_decide_like_the_exact_reference(corner_tensor, sco
     np.testing.assert_allclose(fast.score[ref.accepted], ref.score[ref.accepted], atol=1e-9)
     assert fast.comparisons < ref.comparisons           # the early exit saved work
     assert np.all(fast.score[~ref.accepted] <= ref.score[~ref.accepted] + 1e-9)
-    from interaction_tensor.engine.numba_backend import score_pairs_numba
     s, a, at, cmp = score_pairs_numba(scene.points[pp], po, table, scene.grid(), thr,
                                       corner_tensor.vectors, scene.spacing)
     np.testing.assert_array_equal(a, ref.accepted)
@@ -133,7 +140,6 @@ def test_far_queries_search_occupied_blocks_exactly(cell):
     search), outside the grid, on samples and on cell faces find the cKDTree's nearest."""
     from scipy.spatial import cKDTree
 
-    from interaction_tensor.geometry.grid import FAR_BLOCK, FAR_CELLS
     rng = np.random.default_rng(7)
     pts = np.r_[rng.random((3000, 3)) * [2, 2, 0],
                 rng.random((300, 3)) * [0.01, 0.01, 1.5] + [1.7, 0.2, 0],
@@ -198,7 +204,6 @@ def test_normal_filter_line_and_oriented():
 
 
 def test_top_k_suppression_keeps_predictions_apart(corner_tensor):
-    from interaction_tensor.detection.places import top_k
     pos = np.array([[0, 0, 0], [0.01, 0, 0], [1, 0, 0], [1.02, 0, 0], [3, 0, 0]], float)
     sc = np.array([0.9, 0.95, 0.8, 0.85, 0.1])
     assert top_k(pos, sc, 10, 0.05) == [1, 3, 4]
@@ -288,7 +293,6 @@ KERNELS = ["cdist", pytest.param("triton", marks=pytest.mark.skipif(
 def test_torch_backend_decides_like_the_cpu_paths(corner_tensor, scored_setup, criterion, device,
                                                   kernel):
     torch = pytest.importorskip("torch")
-    from interaction_tensor.engine.torch_backend import TorchIndex, score_pairs_torch
     if kernel == "triton" and device == "cpu" and os.environ.get("TRITON_INTERPRET") != "1":
         pytest.skip("Triton on the CPU runs under TRITON_INTERPRET=1 only")
     scene, pp, po = scored_setup
@@ -351,7 +355,6 @@ def test_hot_copy_is_the_reordered_array(n):
     """The scene's sorted points and normals (asked for huge pages when large): exactly
     ``a[order]``, C-contiguous, of their own memory, for an empty, a small and a 9.6 MB
     array."""
-    from interaction_tensor.geometry.scene import hot_copy
 
     rng = np.random.default_rng(1)
     a = rng.random((n, 3))
@@ -365,7 +368,6 @@ def test_command_line_turns_numpys_huge_pages_off():
     """The one-shot CLI process keeps NumPy's arrays on 4 kB pages (a 2 M-point detection's
     peak varied by 130 MB from run to run with huge pages); the switch is restored here
     (the glibc settings of :func:`cli._one_shot_memory` are left out: they would stay)."""
-    from interaction_tensor.cli import main as cli
 
     switch = getattr(np._core.multiarray, "_set_madvise_hugepage", None)
     if switch is None:

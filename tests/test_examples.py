@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from interaction_tensor.errors import InputError
+import interaction_tensor as it
 from interaction_tensor import affordances
-from interaction_tensor.examples import posing
-from interaction_tensor.examples import shapes
+from interaction_tensor.cli.main import main
+from interaction_tensor.errors import InputError
+from interaction_tensor.examples import posing, shapes
 
 from support import SHARED_DATA
 
@@ -145,14 +146,12 @@ def test_drop_onto_measures_the_vertical_gap():
 
 
 def test_cli_examples_list_and_build(tmp_path, capsys):
-    from interaction_tensor.cli.main import main
 
     assert main(["examples", "list"]) == 0
     assert "riding-human" in capsys.readouterr().out
     out = tmp_path / "ex"
     assert main(["examples", "build", "-o", str(out), "--examples", "placing-bowl",
                  "--spacing", "0.02", "-q"]) == 0
-    import interaction_tensor as it
 
     t = it.InteractionTensor.load(out / "placing-bowl.npz")
     assert t.affordance == "placing-bowl"

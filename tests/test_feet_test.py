@@ -15,12 +15,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 import interaction_tensor as it
-from interaction_tensor.detection.search import Engine, detect
-from interaction_tensor.placement.checks import (feet_gaps,
-                                          standing_groups)
 from interaction_tensor import affordances
+from interaction_tensor.detection.search import Engine, detect
 from interaction_tensor.examples.procedural import box_part, parts_mesh
-
+from interaction_tensor.placement.checks import feet_gaps, standing_groups
 
 #: only the feet test decides
 FEET_ONLY = dict(clearance=False, contact=False, interior=False, ground=False)

@@ -13,7 +13,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import interaction_tensor as it
+from interaction_tensor.examples import demo
 from interaction_tensor.geometry.load import load_geometry
+from interaction_tensor.geometry.readers import read_ply
 
 # a small tetrahedron-like mesh with a non-trivial extent (metres)
 V = np.array([[0.0, 0.0, 0.0], [0.3, 0.0, 0.0], [0.0, 0.2, 0.0], [0.0, 0.0, 0.1],
@@ -268,13 +270,11 @@ def test_any_xyz_table_is_read_whole_or_refused_in_one_line(tmp_path, rows):
 def test_heatmap_and_glb_open_in_viewers(tmp_path):
     """heatmap.ply carries the score as MeshLab's quality and a CloudCompare scalar field;
     predictions.glb holds the heat map and the posed objects."""
-    from interaction_tensor.examples import demo
 
     ex = demo.build()
     tensor = it.train(ex.query, ex.scene_object, "placing-bowl", spacing=demo.DEMO_SPACING)
     result = it.detect(ex.scene, tensor, sample_fraction=0.05, top_k=3)
     result.save(tmp_path)
-    from interaction_tensor.geometry.readers import read_ply
 
     heat = read_ply(tmp_path / "heatmap.ply")["vertex"]
     assert np.allclose(heat["quality"], result.heat, atol=1e-6)

@@ -3,8 +3,8 @@ import pytest
 import trimesh
 
 import interaction_tensor as it
+from interaction_tensor.geometry.files import Gathered, write_json, write_ply_points
 from interaction_tensor.geometry.load import load_geometry
-from interaction_tensor.geometry.files import write_ply_points
 
 
 @pytest.fixture()
@@ -103,7 +103,6 @@ def test_write_json_writes_gathered_columns_as_their_arrays(tmp_path):
     the gathered array would be, a block at a time, without being gathered whole."""
     import json
 
-    from interaction_tensor.geometry.files import Gathered, write_json
 
     rng = np.random.default_rng(3)
     base = rng.random(250_003)

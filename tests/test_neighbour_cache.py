@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 
@@ -10,14 +9,20 @@ import interaction_tensor as it
 from interaction_tensor.detection.search import Engine, detect
 from interaction_tensor.engine import backends
 from interaction_tensor.engine import numba_backend as kernels
+from interaction_tensor.engine.backends import (
+    CACHE_AUTO_FRACTION,
+    cache_pays,
+    pairs_of,
+    spatial_order,
+)
 from interaction_tensor.engine.numba_backend import score_pairs_numba
+from interaction_tensor.examples import demo
 
 from support import corner_example
 
 
 @pytest.mark.parametrize("criterion,vectors", [("paper", "surface"), ("gaussian", "points")])
 def test_cached_scoring_is_bit_identical(criterion, vectors):
-    from interaction_tensor.examples import demo
 
     q, s = corner_example()
     t = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1,
@@ -42,7 +47,6 @@ def test_cached_scoring_is_bit_identical(criterion, vectors):
 def test_nearest_through_a_built_cache_is_the_grid_search():
     """The placement tests' nearest samples go through the grid's cache as scoring left
     it (built trees scanned, the rest searched): the same indices as the grid search."""
-    from interaction_tensor.examples import demo
 
     q, s = corner_example()
     t = it.InteractionTensor.fit(q, s, "corner-box", it.TrainSettings(query_points=3000, seed=1))
@@ -100,7 +104,6 @@ def test_detection_with_the_cache_decides_alike(monkeypatch):
 
 
 def test_auto_cache_follows_the_test_point_density():
-    from interaction_tensor.engine.backends import CACHE_AUTO_FRACTION, cache_pays
 
     assert Engine().neighbour_cache is None
     assert cache_pays(None, 0.3) and cache_pays(None, CACHE_AUTO_FRACTION)
@@ -110,7 +113,6 @@ def test_auto_cache_follows_the_test_point_density():
 
 
 def test_spatial_order_keeps_each_candidate_whole():
-    from interaction_tensor.engine.backends import pairs_of, spatial_order
 
     rng = np.random.default_rng(4)
     pts = rng.random((500, 3))

@@ -12,13 +12,20 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
-from interaction_tensor.placement.checks import (FAILS_CONTACT, FAILS_INTERIOR, PLACED,
-                                          check_placements, contact_fractions, contact_kept,
-                                          interior_violations, nearest_samples)
 from interaction_tensor import affordances
-from interaction_tensor.examples import shapes
+from interaction_tensor.examples import demo, shapes
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.geometry.sampling import winding_numbers
+from interaction_tensor.placement.checks import (
+    FAILS_CONTACT,
+    FAILS_INTERIOR,
+    PLACED,
+    check_placements,
+    contact_fractions,
+    contact_kept,
+    interior_violations,
+    nearest_samples,
+)
 
 
 @pytest.fixture(scope="module")
@@ -84,7 +91,6 @@ def test_interior_points_lie_inside_the_body_at_their_depth(sitting):
     assert t.interior_radius.min() >= st.interior_min_depth - 1e-12
     assert t.interior_radius.max() <= st.interior_max + 1e-12
     # thin-walled objects have none: the demo bowl
-    from interaction_tensor.examples import demo
 
     q, s = demo.training_example()
     bowl = it.InteractionTensor.fit(q, s, "bowl", it.TrainSettings(scene_spacing=0.02))

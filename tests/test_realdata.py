@@ -1,4 +1,4 @@
-"""Real scenes: RGB-D frames and scans, cleaning and gravity alignment (issue 5).
+"""Real scenes: RGB-D frames and scans, cleaning and gravity alignment.
 
 The TUM desk frame is read from ../shared/data/rgbd/tum_desk (or $ITENSOR_SHARED_DATA);
 those tests are skipped when it is absent. Everything runs at 2 cm so that the file takes
@@ -17,8 +17,18 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 import interaction_tensor as it
+from interaction_tensor.api import load_scene
+from interaction_tensor.capture import rgbd
+from interaction_tensor.capture.pipeline import surface_noise
+from interaction_tensor.cli.main import build_parser, scene_options
 from interaction_tensor.errors import InputError
-from interaction_tensor.examples.procedural import bookcase, parts_mesh, room_shell, table
+from interaction_tensor.examples.procedural import (
+    bookcase,
+    parts_mesh,
+    room_shell,
+    table,
+)
+from interaction_tensor.geometry.collision import Body, MeshCollider, box
 
 from support import shared_file
 
@@ -183,7 +193,6 @@ def test_depth_faces_join_neighbours_and_leave_steps_open(tmp_path):
                   elements=st.sampled_from([0.0, 0.5, 0.505, 0.52, 1.0, 1.02, 3.0])),
        st.integers(2, 400))
 def test_depth_faces_of_any_image_join_only_close_valid_neighbours(depth, max_faces):
-    from interaction_tensor.capture import rgbd
 
     faces = rd.depth_faces(depth, max_faces=max_faces)
     valid = depth > 0
@@ -248,7 +257,6 @@ def test_frame_and_scan_keep_their_surface(tmp_path):
 def test_surface_noise_measures_the_spread_not_the_edges():
     from scipy.spatial import cKDTree
 
-    from interaction_tensor.capture.pipeline import surface_noise
 
     rng = np.random.default_rng(0)
     grid = np.stack(np.meshgrid(np.arange(0, 1, 0.01), np.arange(0, 1, 0.01)), -1).reshape(-1, 2)
@@ -270,7 +278,6 @@ def test_tum_surface_collision_test():
     clear patch of the desk top is clear of it, a block through the top's height is not, and
     neither is a post through it; so detection's collision test runs on the frame. The
     surface's noise is measured (under 1 cm at this spacing)."""
-    from interaction_tensor.geometry.collision import Body, MeshCollider, box
 
     frame = shared_file("rgbd/tum_desk/depth.png").parent
     scene = it.load_scene(str(frame), spacing=SPACING)
@@ -459,21 +466,17 @@ def test_no_align_and_units_warning():
 # ----------------------------------------------------------------------------- CLI glue
 def _detect_args(argv):
     """``itensor detect`` arguments parsed by the real parser."""
-    from interaction_tensor.cli.main import build_parser
 
     return build_parser().parse_args(["detect", *argv, "-o", "unused"])
 
 
 def _scene(argv):
-    from interaction_tensor.api import load_scene
-    from interaction_tensor.cli.main import scene_options
 
     args = _detect_args(argv)
     return load_scene(args.scene, SPACING, **scene_options(args))
 
 
 def test_cli_options_parse():
-    from interaction_tensor.cli.main import scene_options
 
     a = _detect_args(["d.npz", "--depth", "x.png", "--intrinsics", "i.json",
                       "--depth-scale", "5000", "--no-remove-outliers", "--up", "auto"])

@@ -1,4 +1,4 @@
-"""Bad options and bad examples are refused up front, naming what is wrong (issue 15).
+"""Bad options and bad examples are refused up front, naming what is wrong .
 
 Option values are checked by argparse types (:func:`cli_common.number`) and again by the
 settings dataclasses for Python callers; training refuses examples whose objects overlap;
@@ -7,12 +7,21 @@ a PCD's NaN points are dropped and said."""
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings as hsettings, strategies as st
+from hypothesis import given
+from hypothesis import settings as hsettings
+from hypothesis import strategies as st
 
 import interaction_tensor as it
+from interaction_tensor.capture import load_intrinsics, prepare_real_scene
 from interaction_tensor.cli.main import build_parser, main
+from interaction_tensor.detection.places import top_k
 from interaction_tensor.errors import InputError, SettingsError
-from interaction_tensor.geometry.sampling import winding_numbers, winding_numbers_reference
+from interaction_tensor.geometry import scene as scene_mod
+from interaction_tensor.geometry.files import write_ply_points
+from interaction_tensor.geometry.sampling import (
+    winding_numbers,
+    winding_numbers_reference,
+)
 from interaction_tensor.settings import DetectSettings, TrainSettings
 
 from support import plane
@@ -87,7 +96,6 @@ def test_settings_refuse_what_the_cli_refuses():
 
 
 def test_realdata_cleaning_options_are_checked(tmp_path):
-    from interaction_tensor.capture import prepare_real_scene
 
     g = plane(0.0, 0.5)
     for name, value in (("voxel_size", float("nan")), ("voxel_size", -0.01),
@@ -177,7 +185,6 @@ def test_tampered_intrinsics_are_refused_or_sane(changes, drop, tmp_path_factory
     import json
 
     from support import shared_file
-    from interaction_tensor.capture import load_intrinsics
 
     data = json.loads(shared_file("rgbd/tum_desk/intrinsics.json").read_text())
     data.update(changes)
@@ -216,7 +223,6 @@ def test_cut_or_damaged_frame_images_are_refused(which, fraction, garbage, tmp_p
 
 
 def test_a_scene_too_big_for_memory_is_refused_up_front(monkeypatch):
-    from interaction_tensor.geometry import scene as scene_mod
 
     scene_mod.check_memory(1_000_000, "big.ply", available=2 ** 31)          # 0.3 GB: fine
     with pytest.raises(InputError, match=r"big.ply: 20,000,000 scene points need about 5.6 GB "
@@ -247,7 +253,6 @@ def _greedy_reference(positions, scores, k, radius):
 def test_top_k_sweep_is_the_greedy_suppression(n, k, radius, ties, seed):
     """The block sweep (no (N, 3) temporary per pick) picks exactly what the greedy
     definition picks, ties to the lower index included."""
-    from interaction_tensor.detection.places import top_k
 
     rng = np.random.default_rng(seed)
     positions = rng.random((n, 3)) * [2, 2, 0.1]
@@ -265,7 +270,6 @@ def test_a_scene_with_no_candidate_says_why(tmp_path, capsys, corner_tensor):
     g = np.stack(np.meshgrid(np.linspace(0, 0.5, 30), np.linspace(0, 0.5, 30)), -1).reshape(-1, 2)
     pts = np.column_stack([np.zeros(len(g)), g])                   # a wall: normals along x
     normals = np.tile([1.0, 0.0, 0.0], (len(pts), 1))
-    from interaction_tensor.geometry.files import write_ply_points
     write_ply_points(tmp_path / "wall.ply", pts, normals=normals)
     corner_tensor.save(tmp_path / "t.npz")
     assert main(["detect", str(tmp_path / "wall.ply"), str(tmp_path / "t.npz"),

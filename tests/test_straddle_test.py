@@ -16,14 +16,24 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import interaction_tensor as it
-from interaction_tensor.placement.checks import (FAILS_CONTACT, FAILS_MOUNT, PLACED,
-                                          SEAT_POINTS, SEAT_RADIUS, SEAT_REGION_HEIGHT,
-                                          above_ground, box_occupied, check_placements,
-                                          seat_fractions_poses, seat_region, straddle_passes,
-                                          straddle_passes_at)
-from interaction_tensor.errors import InputError
 from interaction_tensor import affordances
+from interaction_tensor.errors import InputError
 from interaction_tensor.examples.procedural import box_part, parts_mesh
+from interaction_tensor.placement.checks import (
+    FAILS_CONTACT,
+    FAILS_MOUNT,
+    PLACED,
+    SEAT_POINTS,
+    SEAT_RADIUS,
+    SEAT_REGION_HEIGHT,
+    above_ground,
+    box_occupied,
+    check_placements,
+    seat_fractions_poses,
+    seat_region,
+    straddle_passes,
+    straddle_passes_at,
+)
 
 from support import descriptor_with_header
 

@@ -18,13 +18,19 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import interaction_tensor as it
-from interaction_tensor.placement.checks import (FAILS_THROUGH, PLACED, check_placements,
-                                          through_crossed, through_crossed_poses,
-                                          through_polygon)
-from interaction_tensor.geometry.collision import MeshCollider
 from interaction_tensor import affordances
-from interaction_tensor.examples.procedural import box_part, parts_mesh
+from interaction_tensor.cli.main import _detect_settings, build_parser
 from interaction_tensor.engine.numba_backend import available as numba_available
+from interaction_tensor.examples.procedural import box_part, parts_mesh
+from interaction_tensor.geometry.collision import MeshCollider
+from interaction_tensor.placement.checks import (
+    FAILS_THROUGH,
+    PLACED,
+    check_placements,
+    through_crossed,
+    through_crossed_poses,
+    through_polygon,
+)
 
 #: only the through test decides
 THROUGH_ONLY = ("clearance", "contact", "interior", "ground", "feet", "straddle", "mount")
@@ -147,7 +153,6 @@ def test_detection_spends_the_exact_tests_on_hooks_with_something_through(hangin
 
 
 def test_the_cli_turns_the_test_off():
-    from interaction_tensor.cli.main import _detect_settings, build_parser
 
     args = build_parser().parse_args(["detect", "scene.ply", "d.npz", "-o", "out",
                                       "--skip-test", "through"])

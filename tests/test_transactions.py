@@ -15,8 +15,9 @@ from pathlib import Path
 import pytest
 
 import interaction_tensor as it
+import interaction_tensor.geometry.files as io_mod
 from interaction_tensor.cli.main import main
-from interaction_tensor.geometry.files import atomic_dir, write_mesh
+from interaction_tensor.geometry.files import _signals_deferred, atomic_dir, write_mesh
 
 from support import corner_example
 
@@ -112,7 +113,6 @@ def test_signals_wait_while_a_temporary_is_made_or_swapped():
     """SIGTERM arriving between making a temporary and entering the block that removes it
     left .part files behind under load (1 run in the full suite): it is now held back over
     those few lines and raised right after them."""
-    from interaction_tensor.geometry.files import _signals_deferred
 
     class Stop(Exception):
         pass
@@ -140,12 +140,10 @@ def test_signals_wait_while_a_temporary_is_made_or_swapped():
 
 
 def test_a_signal_held_while_the_temporary_is_made_still_removes_it(tmp_path, monkeypatch):
-    """The signal held back while the temporary is made is raised as that block ends; it
-    used to escape before the block that removes the temporary, leaving a .part directory
-    (the SIGTERM case of the test above, 1 run in 4 of this file on 2026-11-25)."""
+    """The signal held back while the temporary is made is raised as that block ends, inside
+    the block that removes the temporary: no .part directory is left behind."""
     import tempfile
 
-    import interaction_tensor.geometry.files as io_mod
 
     class Stop(Exception):
         pass

@@ -13,9 +13,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from interaction_tensor.cli.main import main
+from interaction_tensor.errors import InputError
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.geometry.files import write_json, write_mesh, write_ply_points
+from interaction_tensor.outputs import render_outdir, render_tensor, write_viewer
 from interaction_tensor.outputs.export import colormap
+from interaction_tensor.outputs.html import build_data
 
 PIL = pytest.importorskip("PIL")
 from PIL import Image  # noqa: E402
@@ -87,7 +91,6 @@ def _not_blank(a: np.ndarray) -> None:
 
 # --------------------------------------------------------------------------- render.png
 def test_render_outdir_draws_heat_map_objects_and_colour_bar(outdir):
-    from interaction_tensor.outputs import render_outdir
 
     png = render_outdir(outdir)
     assert png == outdir / "render.png"
@@ -107,7 +110,6 @@ def test_render_needs_no_opengl(outdir, tmp_path, monkeypatch):
     """The software renderer is the only path: it works with OpenGL libraries unimportable."""
     for name in ("OpenGL", "OpenGL.GL", "pyrender", "pyvista", "vtk", "matplotlib"):
         monkeypatch.setitem(sys.modules, name, None)
-    from interaction_tensor.outputs import render_outdir
 
     a = _pixels(render_outdir(outdir, tmp_path / "no-gl.png", supersample=1))
     _not_blank(a)
@@ -115,7 +117,6 @@ def test_render_needs_no_opengl(outdir, tmp_path, monkeypatch):
 
 
 def test_render_without_predictions(tmp_path):
-    from interaction_tensor.outputs import render_outdir
 
     make_outdir(tmp_path, n_predictions=0)
     a = _pixels(render_outdir(tmp_path, supersample=1))
@@ -124,7 +125,6 @@ def test_render_without_predictions(tmp_path):
 
 
 def test_render_tensor_like_figure_2(corner_tensor, tmp_path):
-    from interaction_tensor.outputs import render_tensor
 
     a = _pixels(render_tensor(corner_tensor, tmp_path / "tensor.png"))
     _not_blank(a)
@@ -132,8 +132,6 @@ def test_render_tensor_like_figure_2(corner_tensor, tmp_path):
 
 
 def test_bad_outdir_is_an_input_error(tmp_path):
-    from interaction_tensor.errors import InputError
-    from interaction_tensor.outputs import render_outdir, write_viewer
 
     with pytest.raises(InputError, match="predictions.json"):
         render_outdir(tmp_path)
@@ -145,7 +143,6 @@ def test_bad_outdir_is_an_input_error(tmp_path):
 # --------------------------------------------------------------------------- CLI
 @pytest.fixture()
 def cli():
-    from interaction_tensor.cli.main import main
 
     return main
 
@@ -163,7 +160,6 @@ def test_cli_view_show_render(cli, outdir, tmp_path, capsys):
 
 # --------------------------------------------------------------------------- index.html
 def test_page_is_self_contained(outdir):
-    from interaction_tensor.outputs import write_viewer
 
     page = write_viewer(outdir).read_text()
     assert not re.search(r"<script[^>]+src=", page)
@@ -174,7 +170,6 @@ def test_page_is_self_contained(outdir):
 
 
 def test_page_without_descriptor_uses_posed_objects(tmp_path):
-    from interaction_tensor.outputs.html import build_data
 
     make_outdir(tmp_path)
     data = build_data(tmp_path)
@@ -205,7 +200,6 @@ def _console_errors(stderr: str) -> list[str]:
                                              ".ci/run installs it")
 @pytest.mark.parametrize("renderer", ["webgl", "canvas2d"])
 def test_page_in_headless_chromium(outdir, tmp_path, renderer, record_property):
-    from interaction_tensor.outputs import write_viewer
 
     page = write_viewer(outdir, out_html=tmp_path / "index.html")
     extra = ["--disable-webgl", "--disable-3d-apis"] if renderer == "canvas2d" else []

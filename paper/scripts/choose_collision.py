@@ -62,13 +62,19 @@ from pathlib import Path
 
 import numpy as np
 
-from interaction_tensor.geometry import collision
-from interaction_tensor.placement.checks import (above_ground, below_ground, feet_gaps_poses,
-                                         seat_fractions_poses,
-                                         standing_groups, straddle_passes_poses)
-from interaction_tensor.geometry.scene import prepare_scene
-from itensor_paper import labelled
 from interaction_tensor import affordances as _aff
+from interaction_tensor.geometry import collision
+from interaction_tensor.geometry.scene import prepare_scene
+from interaction_tensor.placement.checks import (
+    above_ground,
+    below_ground,
+    feet_gaps_poses,
+    seat_fractions_poses,
+    standing_groups,
+    straddle_passes_poses,
+)
+from itensor_paper import labelled
+
 TESTS = {a: _aff.get(a).judge.tests for a in _aff.names()}
 from interaction_tensor import affordances
 

@@ -24,12 +24,12 @@ from pathlib import Path
 
 import numpy as np
 
-from interaction_tensor.geometry import collision
-from interaction_tensor.placement.checks import through_crossed_poses
-from interaction_tensor.descriptor.tensor import through_section_of
-from itensor_paper import labelled
 from interaction_tensor import affordances
+from interaction_tensor.descriptor.tensor import through_section_of
+from interaction_tensor.geometry import collision
 from interaction_tensor.geometry.scene import prepare_scene
+from interaction_tensor.placement.checks import through_crossed_poses
+from itensor_paper import labelled
 
 BANDS = (0.0, 0.25, 0.5, 0.75, 1.0)
 SPACING = 0.01

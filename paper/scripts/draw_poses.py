@@ -20,11 +20,11 @@ from pathlib import Path
 import numpy as np
 from PIL import Image
 
+from interaction_tensor import affordances
+from interaction_tensor.geometry.load import load_geometry
 from itensor_paper import pictures as P
 from itensor_paper.judge import Judge, JudgeScene
 from itensor_paper.oracle import standing_pose
-from interaction_tensor import affordances
-from interaction_tensor.geometry.load import load_geometry
 
 
 def main(argv=None) -> int:

@@ -29,13 +29,13 @@ from pathlib import Path
 
 import numpy as np
 
+from interaction_tensor import affordances
+from interaction_tensor.detection.places import top_k
+from interaction_tensor.geometry.load import load_geometry
 from itensor_paper.common import ranking_radius, write_csv
 from itensor_paper.judge import Judge, JudgeScene
 from itensor_paper.oracle import standing_filling
-from interaction_tensor import affordances
-from interaction_tensor.geometry.load import load_geometry
-from interaction_tensor.detection.places import top_k
-
+from itensor_paper.rooms.validation import build_scene
 
 ORACLE_COLUMNS = ["scene", "example", "support_samples", "poses", "tap_pretest", "tap_test",
                   "valid", "valid_places", "seconds"]
@@ -63,7 +63,6 @@ def main(argv=None) -> int:
                          "the search on a validation room quickly)")
     ap.add_argument("--out", default=None)
     args = ap.parse_args(argv)
-    from itensor_paper.rooms.validation import build_scene
 
     examples = {n: affordances.build(n, args.objects) for n in args.examples}
     judges = {n: Judge.for_example(ex) for n, ex in examples.items()}

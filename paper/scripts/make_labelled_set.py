@@ -17,6 +17,7 @@ from collections import Counter
 from pathlib import Path
 
 from itensor_paper import labelled
+from itensor_paper.report import judge_markdown
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -31,7 +32,6 @@ def main() -> int:
     args = ap.parse_args()
     objects = Path(args.objects)
     if args.summary:
-        from itensor_paper.report import judge_markdown
 
         rows, verdicts = labelled.judge_accuracy(labelled.load(), str(objects), objects.parent)
         Path(args.summary).write_text(

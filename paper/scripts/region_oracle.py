@@ -17,11 +17,11 @@ import argparse
 import time
 from pathlib import Path
 
+from interaction_tensor import affordances
+from interaction_tensor.geometry.load import load_geometry
 from itensor_paper.common import write_csv
 from itensor_paper.judge import Judge, JudgeScene
 from itensor_paper.oracle import region_poses
-from interaction_tensor import affordances
-from interaction_tensor.geometry.load import load_geometry
 
 
 def _xyz(text: str) -> tuple:

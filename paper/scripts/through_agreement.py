@@ -20,12 +20,13 @@ import time
 
 import numpy as np
 
+import interaction_tensor as it
+from interaction_tensor import affordances
+from interaction_tensor.placement.checks import through_crossed
+from itensor_paper.rooms import validation
+
 
 def main(argv=None) -> int:
-    import interaction_tensor as it
-    from interaction_tensor.placement.checks import through_crossed
-    from interaction_tensor import affordances
-    from itensor_paper.rooms import validation
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--examples", nargs="+", default=["hanging-hanger", "hanging-handbag"])

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
+from interaction_tensor import affordances
 from itensor_paper.baselines import icp as icp_mod
 from itensor_paper.baselines.bisector_icp import bisector_baseline
 from itensor_paper.baselines.common import capped_candidates
 from itensor_paper.baselines.naive import naive
-from interaction_tensor import affordances
 
 
 def _cloud(n=600, seed=0):

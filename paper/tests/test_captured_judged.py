@@ -1,4 +1,4 @@
-"""Real scenes: RGB-D frames and scans, cleaning and gravity alignment (issue 5).
+"""Real scenes: RGB-D frames and scans, cleaning and gravity alignment.
 
 The TUM desk frame is read from ../shared/data/rgbd/tum_desk (or $ITENSOR_SHARED_DATA);
 those tests are skipped when it is absent. Everything runs at 2 cm so that the file takes
@@ -7,10 +7,11 @@ well under two minutes on 2 cores.
 
 from __future__ import annotations
 
-
 import pytest
 
 import interaction_tensor as it
+from interaction_tensor import affordances
+from itensor_paper.judge import Judge, JudgeScene
 
 from paper_support import shared_file
 
@@ -23,8 +24,6 @@ def test_tum_sitting_finds_the_chair():
     triangles): its best place is on the chair at the left of the view, the seat on the
     chair's seat (0.45-0.6 m up, not the 0.72 m desk top), the feet over the floor within
     reach, and the judge, on the frame's own triangles, finds it valid."""
-    from itensor_paper.judge import Judge, JudgeScene
-    from interaction_tensor import affordances
 
     objects = shared_file("objects/paper_bowl.ply").parent
     ex = affordances.build("sitting-human", objects)

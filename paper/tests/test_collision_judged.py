@@ -15,15 +15,15 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
+from interaction_tensor import affordances
+from interaction_tensor.detection.places import suppression_radius
+from interaction_tensor.detection.ranking import CollisionCheck, full_scores, rank_pairs
 from interaction_tensor.detection.search import Engine, detect
+from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.geometry import collision
 from interaction_tensor.geometry.collision import Body, MeshCollider
-from interaction_tensor.detection.ranking import CollisionCheck, rank_pairs
-from interaction_tensor.detection.places import suppression_radius
-from interaction_tensor import affordances
-from interaction_tensor.examples.procedural import box_part, parts_mesh
-
-
+from itensor_paper.labelled import seated_reach, site_pose
+from itensor_paper.tuning import RankingCheck, table_top
 
 #: every pair accepted by score and the sampled placement tests off: only collision decides
 OPEN = dict(threshold=1e-3, skip_tests=("clearance", "contact", "interior", "ground"),
@@ -51,8 +51,6 @@ def test_the_tunings_top_ranks_untested_placements_as_the_evaluation_does(hangin
     allowance: a placement it could not test ranks with the pairs that fail a test, not
     above them nor out. The tuning's candidates share one check's verdicts, each ranked
     with an allowance of its own (``RankingCheck``)."""
-    from interaction_tensor.detection.ranking import full_scores
-    from itensor_paper.tuning import RankingCheck, table_top
 
     ex, tensor = hanging
     scene = it.prepare_scene(ex.scene_object, 0.01, seed=0)
@@ -89,7 +87,6 @@ def test_sitting_collision_test_rejects_knees_through_a_seats_front_edge(behind,
     behind it, the tops of the shins cross the top at the knees and it fails (the published
     scenes' counters and TV units, sat on at their edge), though a 5 cm move frees the whole
     body (sitting's other test) and no uncut triangle of the shins lies above the band."""
-    from itensor_paper.labelled import seated_reach, site_pose
 
     ex = affordances.build("sitting-human")
     whole, (depth, above) = affordances.acceptance("sitting")["collision"]

@@ -7,9 +7,14 @@ import json
 from pathlib import Path
 
 import numpy as np
-
 import pytest
 
+from interaction_tensor.cli.main import main
+from interaction_tensor.detection.search import Engine
+from interaction_tensor.errors import InputError
+from interaction_tensor.geometry.files import atomic_dir
+from itensor_paper import runner
+from itensor_paper.merge import redraw
 from itensor_paper.runner import METHODS, metrics
 
 from paper_support import shared_file
@@ -51,7 +56,6 @@ def test_metrics_definitions():
 
 
 def test_evaluate_smoke_on_two_scenes(tmp_path):
-    from interaction_tensor.cli.main import main
 
     s1 = shared_file("scenes/office-desk1.ply")
     s2 = shared_file("scenes/office-desk5.ply")
@@ -97,10 +101,19 @@ def test_evaluate_smoke_on_two_scenes(tmp_path):
         assert int(r["accepted_top"]) == len(said)
         assert int(r["accepted_top_valid"]) == sum(j["valid"] == "True" for j in said)
     assert "## The top predictions each method accepted" in (out / "table1.md").read_text()
+    # the tracked summary: Table 1 written afresh from the verdicts, the judge's figures, one
+    # picture per affordance, and the folder replaced whole by the next summary
+    summary = tmp_path / "summary"
+    assert main(["paper", "summary", str(out), "-o", str(summary), "--quiet"]) == 0
+    assert (summary / "table1.md").read_text() == (out / "table1.md").read_text()
+    assert (summary / "table1.csv").read_text() == (out / "table1.csv").read_text()
+    assert (summary / "judge_accuracy.csv").exists()
+    assert [p.name for p in (summary / "pictures").iterdir()] == ["placing.png"]
+    assert main(["paper", "summary", str(tmp_path / "nothing"), "-o", str(summary)]) == 2
+    assert (summary / "table1.md").exists()
 
 
 def test_evaluate_bad_input_is_one_line_error(tmp_path, capsys):
-    from interaction_tensor.cli.main import main
 
     assert main(["paper", "evaluate", "--scenes", str(tmp_path / "none"), "-o", str(tmp_path)]) == 2
     assert main(["paper", "evaluate", "--scenes", str(tmp_path), "-o", str(tmp_path / "o")]) == 2
@@ -110,7 +123,6 @@ def test_evaluate_bad_input_is_one_line_error(tmp_path, capsys):
 
 def test_evaluate_merge_equals_one_run(tmp_path, capsys):
     """Runs on disjoint scene subsets merge into the table one run over all scenes gives."""
-    from interaction_tensor.cli.main import main
 
     s1 = shared_file("scenes/office-desk1.ply")
     s2 = shared_file("scenes/office-desk5.ply")
@@ -178,7 +190,6 @@ def test_evaluate_merge_equals_one_run(tmp_path, capsys):
     # the pictures drawn again from the recorded poses: the same pictures
     from PIL import Image
 
-    from itensor_paper.pictures import redraw
 
     for p in (out / "pictures").glob("*.png"):
         p.unlink()
@@ -218,7 +229,6 @@ def test_evaluate_merge_equals_one_run(tmp_path, capsys):
 def test_evaluate_rejudge_restores_the_verdicts_of_the_current_judge(tmp_path, capsys):
     """A finished run judged again: with the same judge the files are the run's; a verdict
     tampered with is judged again (and its picture drawn again), the table follows it."""
-    from interaction_tensor.cli.main import main
 
     scene = shared_file("scenes/office-desk1.ply")
     run = tmp_path / "run"
@@ -252,8 +262,6 @@ def test_evaluate_rejudge_restores_the_verdicts_of_the_current_judge(tmp_path, c
 
 
 def test_atomic_dir_keeps_the_earlier_result_on_failure(tmp_path):
-    from interaction_tensor.errors import InputError
-    from interaction_tensor.geometry.files import atomic_dir
 
     out = tmp_path / "out"
     with atomic_dir(out, "run.json") as d:
@@ -285,12 +293,10 @@ def test_a_top_pair_the_collision_tests_never_reached_is_not_counted_accepted(tm
     while ``accepted`` was the score's and placement tests' decision alone)."""
     import dataclasses
 
-    from interaction_tensor.cli.main import main
 
-    from interaction_tensor.detection import search
 
-    no_budget = search.Engine(collision_max_tests=0)
-    monkeypatch.setattr(search, "Engine", lambda **kw: dataclasses.replace(no_budget, **kw))
+    no_budget = Engine(collision_max_tests=0)
+    monkeypatch.setattr(runner, "Engine", lambda **kw: dataclasses.replace(no_budget, **kw))
     out = tmp_path / "eval"
     assert main(["paper", "evaluate", "--scenes", str(shared_file("scenes/office-desk1.ply")), "-o",
                  str(out), "--examples", "placing-bowl", "--test-points", "800",

@@ -13,11 +13,15 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
-from interaction_tensor.placement.checks import (FAILS_FEET, PLACED, check_placements, feet_gaps,
-                                          feet_gaps_poses)
 from interaction_tensor import affordances
 from interaction_tensor.examples.procedural import box_part, parts_mesh
-
+from interaction_tensor.placement.checks import (
+    FAILS_FEET,
+    PLACED,
+    check_placements,
+    feet_gaps,
+    feet_gaps_poses,
+)
 
 #: only the feet test decides
 FEET_ONLY = ("clearance", "contact", "interior", "ground")

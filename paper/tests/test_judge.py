@@ -7,7 +7,9 @@ import pytest
 
 from interaction_tensor import affordances
 from interaction_tensor.examples.procedural import box_part, parts_mesh, table
+from interaction_tensor.geometry import collision
 from itensor_paper.judge import Judge, JudgeScene, JudgeSettings
+from itensor_paper.labelled import level_on_support
 
 
 def _shift(x, y, z):
@@ -120,7 +122,6 @@ def test_a_hanger_turned_level_on_its_rail_is_not_upright():
     test but the upright one (gravity swings it down); a few degrees of tilt are allowed."""
     from dataclasses import replace
 
-    from itensor_paper.labelled import level_on_support
 
     ex = affordances.build("hanging-hanger")
     judge = Judge.for_example(ex)
@@ -184,7 +185,6 @@ def test_a_hanger_flat_against_a_wall_has_nothing_through_its_hook():
 
 
 def test_separation_measures_how_deep_a_box_is_in_a_slab():
-    from interaction_tensor.geometry import collision
 
     slab = collision.MeshCollider(*collision.box((-1, -1, -0.1), (1, 1, 0.0)))
     cube = collision.Body(*collision.box((-0.05, -0.05, 0.0), (0.05, 0.05, 0.1)))
@@ -200,7 +200,6 @@ def test_separation_in_a_slot_tries_the_short_moves_before_the_limit():
     """A cube 1 mm into a counter, with a board 6 mm above its top and walls 5.7 mm from its
     sides: moves of 2 and 5 mm free it, a move of 1 cm in any of the 26 directions hits the
     board or a wall or stays in the counter. With a 1 cm limit it is 2 mm deep, not "deep"."""
-    from interaction_tensor.geometry import collision
 
     parts = [collision.box((-1, -1, -0.1), (1, 1, 0.0)),            # the counter
              collision.box((-1, -1, 0.105), (1, 1, 0.2)),           # a board above

@@ -8,7 +8,12 @@ from collections import Counter
 import numpy as np
 import pytest
 
+from interaction_tensor import affordances
+from interaction_tensor.errors import InputError
 from itensor_paper import labelled
+from itensor_paper.judge import Judge, JudgeScene, JudgeSettings
+from itensor_paper.labelled import LabelledPose, summary_markdown
+from itensor_paper.rooms import validation
 
 from paper_support import SHARED_DATA
 
@@ -21,9 +26,6 @@ def poses():
 @pytest.fixture(scope="module")
 def sitting_traps():
     """The sitting example, the judge-only traps scene and the sitting judge."""
-    from itensor_paper.judge import Judge, JudgeScene
-    from interaction_tensor import affordances
-    from itensor_paper.rooms import validation
 
     ex = affordances.build("sitting-human", _objects())
     return ex, JudgeScene(validation.build_scene("judge_traps").geometry), Judge.for_example(ex)
@@ -56,9 +58,6 @@ def test_the_bar_traps_fail_the_basin_test_and_the_one_side_tap_test(poses):
     the bar runs across the opening, so the tap test's one-side rule rejects them as well,
     and no sink is under them: each test alone would (the lenient judge here has no sink
     test, so that the basin's is seen alone)."""
-    from itensor_paper.judge import Judge, JudgeScene, JudgeSettings
-    from interaction_tensor import affordances
-    from itensor_paper.rooms import validation
 
     traps = [p for p in poses if p.scene == "validation:judge_traps" and p.affordance == "filling"]
     assert len(traps) == 12 and not any(p.valid for p in traps)
@@ -85,9 +84,6 @@ def test_a_hook_on_a_star_base_hangs_below_the_floor_line_of_a_floorless_scan(po
     """The hangers hooked round an office chair's star-base legs (no floor in the scan, as in
     the published office scans) fail the ground test alone; hangers on a rail in the same
     floorless scan pass it."""
-    from itensor_paper.judge import Judge, JudgeScene
-    from interaction_tensor import affordances
-    from itensor_paper.rooms import validation
 
     traps = [p for p in poses if p.scene == "validation:floorless_traps"]
     judge = Judge.for_example(affordances.build("hanging-hanger", _objects()))
@@ -129,7 +125,6 @@ def test_the_file_is_what_the_generator_makes():
 def test_a_tampered_file_is_refused(tmp_path):
     bad = tmp_path / "poses.json"
     bad.write_text('{"format": "something else"}')
-    from interaction_tensor.errors import InputError
 
     with pytest.raises(InputError, match="labelled-poses"):
         labelled.load(bad)
@@ -138,7 +133,6 @@ def test_a_tampered_file_is_refused(tmp_path):
 def test_summary_counts_cases_and_judge_errors():
     from types import SimpleNamespace
 
-    from itensor_paper.labelled import LabelledPose, summary_markdown
 
     def pose(valid, case, scene="validation:living_a"):
         return LabelledPose("sitting", "sitting-human", scene, [[1.0]], valid, case, "")
@@ -155,9 +149,6 @@ def test_a_person_on_a_high_tops_edge_has_the_feet_in_the_air(poses):
     """The people sitting on a counter's or a workbench's edge (the published kitchens'
     counter tops fooled detection): nothing under the feet down to the floor by
     construction, and the judge rejects every one for the feet."""
-    from itensor_paper.judge import Judge, JudgeScene
-    from interaction_tensor import affordances
-    from itensor_paper.rooms import validation
 
     edge = [p for p in poses if p.case == "on a high top's edge, feet in the air"]
     assert len(edge) >= 20 and not any(p.valid for p in edge)
@@ -181,7 +172,6 @@ def test_a_person_with_the_calves_along_a_flush_front_has_nothing_to_stand_on(po
     under the heels' margin; a judge that stood the feet on any surface passed all of them
     (as it passed office-desk1's person on a desk with the legs down its side panel); the
     judge that asks for a surface one can stand on rejects them for the feet alone."""
-    from itensor_paper.judge import Judge, JudgeSettings
 
     flush = [p for p in poses if "flush-fronted" in p.case]
     assert len(flush) >= 5 and not any(p.valid for p in flush)
@@ -197,7 +187,6 @@ def test_a_person_on_a_floors_open_edge_hangs_the_legs_below_everything(poses, s
     """The people on the open edge of the judge traps' floor slab: nothing under the feet and
     the soles 37.5 cm below the lowest thing scanned around (kitchen4's top seats on the edge
     of the scan's floor); a judge that let such feet stand on the ground passed them."""
-    from itensor_paper.judge import Judge, JudgeSettings
 
     edge = [p for p in poses if p.case == "on a floor's open edge, legs hanging below it"]
     assert len(edge) >= 4 and not any(p.valid for p in edge)
@@ -215,7 +204,6 @@ def test_feet_on_a_step_high_above_the_floor_are_no_seat_and_a_foot_rest_is(pose
     floor (a seat with a foot rest: valid); on the tall one they rest on a step 1.2 m up, on
     top of a 1.65 m unit no one climbs to sit on (living-room4's top seats, on a 3 m wall
     unit): a judge that took any step for a floor passed them."""
-    from itensor_paper.judge import Judge, JudgeSettings
 
     steps = [p for p in poses if "step" in p.case and p.scene == "validation:judge_traps"]
     assert sum(p.valid for p in steps) >= 3 and sum(not p.valid for p in steps) >= 3
@@ -234,9 +222,6 @@ def test_a_rider_on_a_tall_partition_is_out_of_reach_and_one_on_a_low_wall_rides
     a 1.4, 1.6 or 2.4 m partition's top the rider passes every other test (the partition goes on
     between the legs, the legs have room, the seat touches) and is out of reach from the
     floor (the published kitchens' top riders straddled their 2.4-2.7 m walls)."""
-    from itensor_paper.judge import Judge, JudgeScene, JudgeSettings
-    from interaction_tensor import affordances
-    from itensor_paper.rooms import validation
 
     walls = [p for p in poses if p.affordance == "riding" and "wall" in p.case
              or "partition" in p.case]

@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from itensor_paper import oracle as O
-from itensor_paper.judge import Judge, JudgeScene
 from interaction_tensor import affordances
 from interaction_tensor.examples import shapes
 from interaction_tensor.examples.shapes import _geometry, box
+from itensor_paper import oracle as O
+from itensor_paper.judge import Judge, JudgeScene
 
 
 @pytest.fixture(scope="module")

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from itensor_paper import pictures
 from interaction_tensor.examples.procedural import box_part, parts_mesh
+from interaction_tensor.outputs.raster import Canvas, frame_points
+from itensor_paper import pictures
 
 
 def _green(img: np.ndarray) -> int:
@@ -38,7 +39,6 @@ def test_an_object_shut_in_a_cabinet_is_drawn_in_front_of_its_doors():
 
 
 def test_canvas_visibility_is_the_depth_test_over_each_3x3_window():
-    from interaction_tensor.outputs.raster import Canvas, frame_points
 
     rng = np.random.default_rng(0)
     pts, q = rng.uniform(-1, 1, (5000, 3)), rng.uniform(-1.2, 1.2, (800, 3))

@@ -14,14 +14,15 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
-from interaction_tensor.placement.checks import (FAILS_STRADDLE, PLACED,
-                                          check_placements,
-                                          straddle_passes,
-                                          straddle_passes_poses)
 from interaction_tensor import affordances
 from interaction_tensor.examples.procedural import box_part, parts_mesh
-
-
+from interaction_tensor.placement.checks import (
+    FAILS_STRADDLE,
+    PLACED,
+    check_placements,
+    straddle_passes,
+    straddle_passes_poses,
+)
 
 #: only the straddle test decides
 STRADDLE_ONLY = ("clearance", "contact", "interior", "ground", "feet", "mount")

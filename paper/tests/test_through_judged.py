@@ -16,9 +16,11 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
-from interaction_tensor.placement.checks import (through_crossed_poses)
 from interaction_tensor import affordances
 from interaction_tensor.engine.numba_backend import available as numba_available
+from interaction_tensor.placement.checks import through_crossed_poses
+from itensor_paper import labelled
+from itensor_paper.rooms import validation
 
 
 @pytest.fixture(scope="module")
@@ -30,8 +32,6 @@ def hanging():
 def test_every_valid_hang_of_the_labelled_set_passes(hanging):
     """The labelled set's validation rooms: every hang the label calls valid has something
     through the hook for the sampled test too (the exact test's positives)."""
-    from itensor_paper import labelled
-    from itensor_paper.rooms import validation
 
     _, tensor = hanging
     valid = [p for p in labelled.load() if p.affordance == "hanging" and p.valid

@@ -7,12 +7,25 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from itensor_paper.tuning import _columns, accepts, choose, curve
-
+from interaction_tensor.affordances import acceptances
+from itensor_paper.tuning import (
+    COLUMNS,
+    TuneResult,
+    TuneSettings,
+    _columns,
+    _contact_column,
+    _Run,
+    accepts,
+    choose,
+    choose_by_tops,
+    curve,
+    shipped_thresholds,
+    table_top,
+    write,
+)
 
 
 def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
-    from itensor_paper.tuning import COLUMNS
 
     def row(score, valid, weight=1.0, viol=0, inner=0, touch=1.0):
         r = {"affordance": "placing", "scene": "s", "example": "placing-bowl",
@@ -59,8 +72,6 @@ def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
 
     # a criterion's S_aff for the placement tests an affordance ships with (the gaussian
     # criterion's, for captured scenes): the best F1 threshold once those tests are applied
-    from itensor_paper.tuning import shipped_thresholds
-    from interaction_tensor.affordances import acceptances
     ACCEPTANCE = acceptances()
 
     assert ACCEPTANCE["placing"]["clearance_limit"] == 0.05
@@ -72,7 +83,6 @@ def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
     assert set(shipped_thresholds(rows4)) == {"placing"}
 
     # the tuning's record is written as one transaction and replaces an earlier one
-    from itensor_paper.tuning import TuneResult, write
 
     curves, chosen = choose(rows, runs)
     res = TuneResult(rows=rows, runs=runs, curves=curves, chosen=chosen, settings={"seed": 0})
@@ -120,7 +130,6 @@ def _table_top_reference(pos, score, placed, free, k, radius):
 @given(st.integers(0, 2 ** 31 - 1), st.integers(1, 6))
 @settings(max_examples=60, deadline=None)
 def test_the_tunings_top_is_the_evaluations_ranking(seed, k):
-    from itensor_paper.tuning import table_top
 
     rng = np.random.default_rng(seed)
     n = int(rng.integers(1, 80))
@@ -143,8 +152,6 @@ def test_the_tuning_chooses_the_placement_tests_whose_top_5_are_valid(tmp_path):
     record."""
     from types import SimpleNamespace
 
-    from itensor_paper.tuning import (TuneResult, TuneSettings, _Run,
-                                                      choose_by_tops)
 
     n = 20
     pos = np.c_[np.arange(n) * 1.0, np.zeros(n), np.zeros(n)]     # 1 m apart: no suppression
@@ -178,7 +185,6 @@ def test_the_tuning_chooses_the_placement_tests_whose_top_5_are_valid(tmp_path):
     table = {r["limit"]: r["top_valid"] for r in res.top_objective["placing"]}
     assert table == {0.2: 0, 0.05: 5}
     # the record lists every candidate with its top 5
-    from itensor_paper.tuning import write
 
     res.settings = {"seed": 0}
     write(res, tmp_path / "tuning")
@@ -186,8 +192,6 @@ def test_the_tuning_chooses_the_placement_tests_whose_top_5_are_valid(tmp_path):
     assert "| 0.05 | off | off | 0.500 | 60.0 | 5/5 |" in md and "| 0.20 | off | off" in md
 
     # the shipped placement tests are tried however low their F1, and marked
-    from itensor_paper.tuning import _contact_column
-    from interaction_tensor.affordances import acceptances
     ACCEPTANCE = acceptances()
 
     acc = ACCEPTANCE["placing"]

@@ -25,8 +25,12 @@ index), :mod:`.descriptor` (the tensor and its file), :mod:`.engine` (scoring ba
 from interaction_tensor._version import __version__
 from interaction_tensor.api import detect, load_scene, load_tensor, train
 from interaction_tensor.batch import batch
-from interaction_tensor.capture import (load_intrinsics, load_rgbd, prepare_real_scene,
-                                        write_input_frame_outputs)
+from interaction_tensor.capture import (
+                                        load_intrinsics,
+                                        load_rgbd,
+                                        prepare_real_scene,
+                                        write_input_frame_outputs,
+)
 from interaction_tensor.descriptor.tensor import InteractionTensor, Keypoints
 from interaction_tensor.detection.places import Prediction
 from interaction_tensor.detection.result import Detection

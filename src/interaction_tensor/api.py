@@ -15,8 +15,8 @@ defaults::
 from __future__ import annotations
 
 import os
-from dataclasses import fields, replace
 import time
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np

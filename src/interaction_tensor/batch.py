@@ -25,7 +25,11 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from interaction_tensor.errors import InputError, SettingsError
+from interaction_tensor.api import CLEANING_OPTIONS, load_scene, load_tensor
+from interaction_tensor.descriptor.tensor import InteractionTensor
+from interaction_tensor.detection.search import detect_many
+from interaction_tensor.errors import InputError, ItensorError, SettingsError
+from interaction_tensor.geometry.files import atomic_path, write_json
 from interaction_tensor.settings import DetectSettings
 
 #: columns of summary.csv
@@ -112,9 +116,6 @@ def run_scene(job: dict) -> list[dict]:
     [(name, path)], outdir, settings (DetectSettings fields), scene_options, render,
     threads. Returns one summary row per descriptor.
     """
-    from interaction_tensor.api import load_scene, load_tensor
-    from interaction_tensor.detection.search import detect_many
-    from interaction_tensor.errors import ItensorError
 
     if job.get("threads"):
         try:
@@ -240,7 +241,6 @@ def batch(scenes, tensors, outdir, settings: DetectSettings | None = None, *, cl
     """
     from dataclasses import fields, replace
 
-    from interaction_tensor.descriptor.tensor import InteractionTensor
 
     t0 = time.perf_counter()
     outdir = Path(outdir)
@@ -261,7 +261,6 @@ def batch(scenes, tensors, outdir, settings: DetectSettings | None = None, *, cl
             desc_paths += expand_paths([t], "descriptors", suffixes=(".npz",))
     for p in desc_paths:        # refuse a bad descriptor now, not on every worker
         InteractionTensor.load(p)
-    from interaction_tensor.api import CLEANING_OPTIONS
 
     allowed = {"scan", "normals", "color", "depth", "intrinsics", "depth_scale", "depth_trunc",
                "scale", "up", *CLEANING_OPTIONS}
@@ -371,7 +370,6 @@ def _progress(total: int, show: bool):
 # --------------------------------------------------------------------------- summary
 def write_summary(result: BatchResult) -> None:
     """``summary.csv``, ``summary.json`` and ``index.html`` in the batch's directory."""
-    from interaction_tensor.geometry.files import atomic_path, write_json
 
     out = result.outdir
     with atomic_path(out / "summary.csv") as tmp:

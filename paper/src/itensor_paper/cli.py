@@ -9,9 +9,21 @@ when this package is installed and never imports it otherwise.
 
 from __future__ import annotations
 
-from interaction_tensor.cli.common import (_fraction, _spacing, examples_option, number,
-                                           objects_dir, quiet_option, seed_option)
+from interaction_tensor.cli.common import (
+    _fraction,
+    _spacing,
+    examples_option,
+    number,
+    objects_dir,
+    quiet_option,
+    seed_option,
+)
 from interaction_tensor.errors import InputError
+from itensor_paper.merge import merge, rejudge
+from itensor_paper.report import judge_markdown, table_markdown
+from itensor_paper.runner import METHODS, EvalSettings, evaluate
+from itensor_paper.summary import write_summary
+from itensor_paper.tuning import TuneSettings, tune, write
 
 _positive_int = number(int, low=1, what="a positive integer")
 _examples = examples_option
@@ -19,7 +31,6 @@ _objects_dir = objects_dir
 
 
 def cmd_evaluate(args) -> int:
-    from itensor_paper.runner import METHODS, EvalSettings, evaluate
 
     methods = tuple(args.methods.split(",")) if args.methods else METHODS
     st = EvalSettings(examples=_examples(args.examples), objects_dir=_objects_dir(args.objects),
@@ -31,7 +42,6 @@ def cmd_evaluate(args) -> int:
     log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
     res = evaluate(list(args.scenes), args.output, st, log)
     if not args.quiet:
-        from itensor_paper.report import judge_markdown, table_markdown
 
         print(table_markdown(res.table, methods))
         if res.judge_accuracy:
@@ -42,7 +52,6 @@ def cmd_evaluate(args) -> int:
 
 
 def cmd_tune(args) -> int:
-    from itensor_paper.tuning import TuneSettings, tune, write
 
     if args.top_candidates < 1:
         raise InputError("--top-candidates", "must be at least 1")
@@ -64,8 +73,6 @@ def cmd_tune(args) -> int:
 
 
 def cmd_evaluate_merge(args) -> int:
-    from itensor_paper.merge import merge
-    from itensor_paper.report import judge_markdown, table_markdown
 
     log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
     res = merge(args.runs, args.output, log, allow=args.allow_differing, replace=args.replace)
@@ -77,8 +84,6 @@ def cmd_evaluate_merge(args) -> int:
 
 
 def cmd_evaluate_rejudge(args) -> int:
-    from itensor_paper.merge import rejudge
-    from itensor_paper.report import judge_markdown, table_markdown
 
     log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
     res = rejudge(args.run, args.output, args.scenes, args.objects,
@@ -88,6 +93,13 @@ def cmd_evaluate_rejudge(args) -> int:
         print(table_markdown(res.table, tuple(res.settings.get("methods") or ())))
         if res.judge_accuracy:
             print("\nThe judge on its labelled poses:\n" + judge_markdown(res.judge_accuracy))
+    return 0
+
+
+def cmd_summary(args) -> int:
+    out = write_summary(args.run, args.output)
+    if not args.quiet:
+        print(f"wrote {out}/table1.md, table1.csv, judge_accuracy.csv, pictures/")
     return 0
 
 
@@ -104,7 +116,7 @@ def register(sub) -> None:
     p.add_argument("--objective", choices=("top", "f1"), default="top",
                    help="choose the placement tests by their validation top 5 judged valid "
                         "(top, Table 1's measure, default) or by the F1 of the pair "
-                        "decisions (f1, before 2026-11-26)")
+                        "decisions (f1)")
     p.add_argument("--top-candidates", type=int, default=30,
                    help="placement tests of largest F1 tried by the top objective (30)")
     p.add_argument("--criterion", choices=("paper", "gaussian"), default="paper",
@@ -176,3 +188,12 @@ def register(sub) -> None:
                         "examples are listed under per_part)")
     quiet_option(p)
     p.set_defaults(func=cmd_evaluate_merge)
+
+    p = sub.add_parser("summary", help="copy the current figures of an evaluation (Table 1, the "
+                                       "judge's accuracy, one picture per affordance) into the "
+                                       "tracked summary the README quotes")
+    p.add_argument("run", help="output directory of an evaluation (evaluate, merge, rejudge)")
+    p.add_argument("-o", "--output", default="paper/results",
+                   help="the summary folder (replaced whole)")
+    quiet_option(p)
+    p.set_defaults(func=cmd_summary)

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from interaction_tensor.geometry.files import atomic_path
+
 METHODS = ("iT-weighted", "iT-uniform", "Naive", "BS")
 AFFORDANCES = ("placing", "sitting", "filling", "riding", "hanging")
 #: The paper's Table 1 (accuracy, F-score), for the report.
@@ -45,7 +47,6 @@ def _json_default(o):
 
 
 def write_csv(path: Path, rows: list[dict], columns: list[str]) -> None:
-    from interaction_tensor.geometry.files import atomic_path
 
     with atomic_path(path) as tmp, open(tmp, "w", newline="") as fh:
         w = csv.DictWriter(fh, columns, extrasaction="ignore")
@@ -63,7 +64,6 @@ def _number(v: float) -> str:
 
 
 def write_json(path: Path, obj) -> None:
-    from interaction_tensor.geometry.files import atomic_path
 
     with atomic_path(path) as tmp:
         Path(tmp).write_text(json.dumps(obj, indent=1, default=_json_default))

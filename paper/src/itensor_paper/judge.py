@@ -12,7 +12,7 @@ output.
 Tests, by affordance (each affordance's :class:`~interaction_tensor.affordances.JudgeRule`):
 
 1. **No penetration** (all). The scene mesh and the query object are tested triangle against
-   triangle with python-fcl (:mod:`..collision`), so thin parts (a 3 mm hook wire, a hanger's
+   triangle with python-fcl (:mod:`~interaction_tensor.geometry.collision`), so thin parts (a 3 mm hook wire, a hanger's
    rods) are seen however thin they are. Containers (mugs, cups, bowls, bottles) are tested
    as their convex hull: something inside the cavity penetrates the interaction as much as
    something inside the wall. Depth is the shortest move (26 directions, a ladder of lengths)
@@ -60,10 +60,10 @@ Tests, by affordance (each affordance's :class:`~interaction_tensor.affordances.
    frame standing on a desk has only its legs near the desk); the costliest test, asked only
    of a pose that passes the others. The object may stand on that bottom or beside it (on
    a double sink's divider, under its tap; a water dispenser's niche with no tray is not a
-   sink). The exhaustive search of every standing mug in the published
-   scenes (``evaluation/oracle.py``, 2026-11-27) found tap and basin tests passed by a mug
-   beside a potted plant under its leaves (kitchen1), on a desk under a wire rack's foot
-   and on chair seats under a desk's edge (office-desk6): none has a sink.
+   sink). The exhaustive search of every standing mug in the published scenes
+   (:mod:`.oracle`) found the tap and basin tests passed by a mug beside a potted plant
+   under its leaves (kitchen1), on a desk under a wire rack's foot and on chair seats under a
+   desk's edge (office-desk6): none has a sink.
 5. **Through the loop** (hanging). The hook's (the strap's) inner disk must be crossed by the
    scene: the rail, peg, door top or panel edge passes through the loop, so the object hangs
    from it. A hanger standing on a flat top or beside an edge fails. So does one flat
@@ -130,7 +130,7 @@ from interaction_tensor import affordances
 from interaction_tensor.errors import InputError
 from interaction_tensor.examples.posing import surface_points
 from interaction_tensor.geometry import collision
-
+from interaction_tensor.geometry.scene import GroundMap, prepare_scene
 
 
 @dataclass(frozen=True)
@@ -239,7 +239,6 @@ class JudgeScene:
     surface samples and their KD-tree (for contact, support and what is above or below)."""
 
     def __init__(self, geometry, spacing: float = 0.01, seed: int = 0):
-        from interaction_tensor.geometry.scene import GroundMap, prepare_scene
 
         if not geometry.is_mesh:
             raise InputError(getattr(geometry, "source", None),
@@ -319,7 +318,7 @@ class Judge:
 
     @classmethod
     def for_example(cls, example, settings: JudgeSettings | None = None) -> "Judge":
-        """The judge of an :class:`~interaction_tensor.examples.affordances.Example`."""
+        """The judge of an :class:`~interaction_tensor.affordances.Example`."""
         return cls(example.query, example.scene_object, example.spec.affordance,
                    example.support_point, example.loop, settings)
 
@@ -329,7 +328,6 @@ class Judge:
         person, the seat region: its surface within 3 cm above its lowest point within
         ``main_contact_radius`` of the support point and not below the seat (buttocks, crotch and thighs: a seat of
         another shape, round or narrow, touches another part of it than the example's)."""
-        from interaction_tensor.examples.posing import surface_points
 
         st = self.settings
         if self.person:

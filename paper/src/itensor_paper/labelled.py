@@ -3,7 +3,7 @@
 Each :class:`LabelledPose` is a pose of one example's query object (4x4, training frame ->
 scene) in a named scene, with a label given by construction, not by the judge: a valid pose
 puts the object on a site that the scene's builder made for that interaction
-(:mod:`..examples.furniture`: a seat, a rail, a tap over a basin...) the way the example
+(:mod:`.rooms.furniture`: a seat, a rail, a tap over a basin...) the way the example
 has it; an invalid one is a hard negative made from a site or from a surface that does not
 afford the interaction (sunk into the seat, hovering, through a table top or a wall, half off
 an edge, under a shelf with no tap, sitting on a wide seat instead of astride...). The poses
@@ -12,7 +12,7 @@ in the published scenes were placed by hand at measured furniture (see :data:`HA
 :func:`generate` makes the set (``scripts/make_labelled_set.py`` writes it to
 ``evaluation/data/labelled_poses.json``), :func:`load` reads it, and :func:`judge_accuracy`
 judges every pose and counts agreement per affordance and class. Scenes are named
-``validation:<name>`` (:mod:`..examples.validation`) or ``shared:<path>`` (a file under the
+``validation:<name>`` (:mod:`.rooms.validation`) or ``shared:<path>`` (a file under the
 shared data directory, e.g. ``shared:scenes/office-desk1.ply``).
 """
 
@@ -26,7 +26,13 @@ from pathlib import Path
 
 import numpy as np
 
+from interaction_tensor import affordances
 from interaction_tensor.errors import InputError
+from interaction_tensor.examples.posing import surface_points
+from interaction_tensor.geometry.files import atomic_path
+from interaction_tensor.geometry.load import load_geometry
+from itensor_paper.judge import Judge, JudgeScene, tilt_degrees
+from itensor_paper.rooms import validation
 
 DATA_FILE = Path(__file__).resolve().parent / "data" / "labelled_poses.json"
 FORMAT = "interaction-tensor-labelled-poses"
@@ -98,7 +104,6 @@ def seated_reach(example) -> tuple[float, float]:
     """How far (m) a seated person reaches along its facing from the support point: its back
     behind it (above the seat) and its calves ahead of it (from 10 cm below the seat down to
     10 cm above the floor). Training frame, facing +x."""
-    from interaction_tensor.examples.posing import surface_points
 
     q = surface_points(example.query, 20000)
     s = example.support_point
@@ -126,7 +131,6 @@ def edge_distance(points_tree, points, start, direction, z, step=0.01, reach=1.5
 def _knee_offset(example) -> float:
     """How far (m) a seated person's knees are from its mid-plane: the median lateral offset
     of its surface within 5 cm below the seat and ahead of it (the tops of the shins)."""
-    from interaction_tensor.examples.posing import surface_points
 
     q = surface_points(example.query, 20000)
     s = example.support_point
@@ -154,7 +158,6 @@ def _last_sample(points_tree, points, start, direction, reach: float) -> float:
 def _feet_samples(example) -> np.ndarray:
     """(N, 3) a seated person's surface samples within 12 cm of its lowest point (its feet),
     training frame."""
-    from interaction_tensor.examples.posing import surface_points
 
     q = surface_points(example.query, 20000)
     return q[q[:, 2] <= q[:, 2].min() + 0.12]
@@ -173,7 +176,6 @@ def _nothing_under(scene_points, feet, pose, floor_gap: float = 0.05) -> bool:
 def _below_hook(example, drop: float = 0.02) -> np.ndarray:
     """(N, 3) a hanging example's surface samples more than ``drop`` below its support point
     (the hanger's body under the hook), training frame."""
-    from interaction_tensor.examples.posing import surface_points
 
     q = surface_points(example.query, 20000)
     return q[q[:, 2] < example.support_point[2] - drop]
@@ -386,9 +388,6 @@ def _validation_poses(ex, name, vs, jscene) -> list:
 def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
     """The labelled set: every validation scene (or ``scenes``) for each affordance's example,
     plus the hand-posed cases in the published scenes when ``shared_dir`` is given."""
-    from interaction_tensor import affordances
-    from itensor_paper.rooms import validation
-    from itensor_paper.judge import JudgeScene
 
     names = list(scenes) if scenes else validation.scene_names()
     examples = {a: affordances.build(n, objects_dir) for a, n in EXAMPLE_OF.items()}
@@ -551,9 +550,8 @@ HAND_POSED: list = [
      "in a niche under a board's edge, no tap", "office-desk2 keyboard niche"),
     ("filling", "scenes/office-desk4.ply", (1.316, 0.234, 0.738), math.pi / 2, False,
      "beside a monitor's stand under its bezel, no tap", "office-desk4 desk"),
-    # found by the exhaustive search of every standing mug (evaluation/oracle.py,
-    # 2026-11-27), which the judge of that day passed; drawn from four sides and labelled by
-    # eye after the judge had seen them: a mug on a double sink's divider under the tap (a
+    # found by the exhaustive search of every standing mug (oracle.py) among poses an earlier
+    # judge passed; drawn from four sides and labelled by eye: a mug on a double sink's divider under the tap (a
     # place a person fills a mug at), and, with no tap or no sink, a mug beside a potted
     # plant under its leaves, on a desk under a wire rack's foot (the rack's frame walls it
     # in above the desk) and on chair seats under a desk's edge
@@ -572,14 +570,9 @@ HAND_POSED: list = [
     ("filling", "scenes/office-desk6.ply", (0.94, 1.143, 0.444), 0.0, False,
      "on a chair seat under a desk's edge, no tap, no sink", "office-desk6 chair"),
     # found by the search of the riding descriptor's poses over whole scenes (one sample per
-    # 10 cm cube, evaluation/oracle.region_poses, 2026-11-27), drawn and labelled by eye:
-    # riders crouched on a kitchen counter, the seat on a tap's spout (kitchen1, over its
-    # double sink's divider) or on a sink's rim (kitchen3). The judge passes both: its two
-    # known errors on the set. A seat-width rule (support under the seat at least 7 cm
-    # across) rejected them but also 15 of the 38 published top riders it passes, astride
-    # 5 cm panels and the edges of boxes, desk tops and counters, which earlier sessions took
-    # for pretend riding; no rule was kept until a person decides those
-    # (docs/results/oracle-2026-11-27)
+    # 10 cm cube, oracle.region_poses), drawn and labelled by eye: riders crouched on a
+    # kitchen counter, the seat on a tap's spout (kitchen1, over its double sink's divider)
+    # or on a sink's rim (kitchen3). The judge passes both: its two known errors on the set.
     ("riding", "scenes/kitchen1.ply", (7.1047, 10.1444, 1.0942), math.pi / 2, False,
      "seat on a tap's spout, feet in the sink", "kitchen1 sink"),
     ("riding", "scenes/kitchen3.ply", (3.2023, 2.8681, 0.905), 0.0, False,
@@ -588,9 +581,9 @@ HAND_POSED: list = [
 
 
 #: Hand-labelled poses in the published scenes given whole (affordance, scene, 4x4 pose,
-#: valid, case, note): the Naive baseline's hangers of 2026-11-27 that lay flat, tilted 90
-#: degrees, with the hook round something low, which the judge passed before it asked for an
-#: upright pose (drawn from four sides and labelled by eye; Naive's top 5).
+#: valid, case, note): hangers of the Naive baseline's top 5 that lay flat, tilted 90 degrees,
+#: with the hook round something low, which a judge without the upright test passes (drawn
+#: from four sides and labelled by eye).
 HAND_POSED_POSES: list = [
     ("hanging", "scenes/kitchen1.ply",
      [[0.50517, 0.001467, -0.863019, 9.70808], [-0.863018, 0.003203, -0.505164, 9.65082],
@@ -611,7 +604,6 @@ HAND_POSED_POSES: list = [
 # ------------------------------------------------------------------ files
 def save(poses: list, path=DATA_FILE, meta: dict | None = None) -> Path:
     """Write the set as JSON (versioned)."""
-    from interaction_tensor.geometry.files import atomic_path
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -639,7 +631,6 @@ def upright(poses: list, tolerance: float = 1.0) -> list:
     detection can propose, as it only turns an example about +Z. The scripts that choose
     detection's tests on the labelled set leave the tilted negatives out, which only the
     judge's upright test is for."""
-    from itensor_paper.judge import tilt_degrees
 
     return [p for p in poses if tilt_degrees(p.pose) <= tolerance]
 
@@ -647,9 +638,7 @@ def upright(poses: list, tolerance: float = 1.0) -> list:
 # ------------------------------------------------------------------ judging the judge
 def scene_geometry(scene: str, shared_dir=None):
     """The Geometry of a labelled pose's ``scene``: ``shared:<path>`` read from
-    ``shared_dir``, ``validation:<name>`` built (:func:`..examples.validation.build_scene`)."""
-    from itensor_paper.rooms import validation
-    from interaction_tensor.geometry.load import load_geometry
+    ``shared_dir``, ``validation:<name>`` built (:func:`.rooms.validation.build_scene`)."""
 
     if scene.startswith("shared:"):
         return load_geometry(Path(shared_dir) / scene[7:])
@@ -662,8 +651,6 @@ def judge_accuracy(poses: list, objects_dir=None, shared_dir=None, log=None):
     A row: affordance, valid_n, valid_right, invalid_n, invalid_right, and the accuracies
     (%) on each class. Poses in the shared scenes are skipped without ``shared_dir``.
     """
-    from interaction_tensor import affordances
-    from itensor_paper.judge import Judge, JudgeScene
 
     judges, scenes, verdicts = {}, {}, []
     for p in poses:

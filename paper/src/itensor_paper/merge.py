@@ -19,7 +19,16 @@ from pathlib import Path
 
 import numpy as np
 
+from interaction_tensor import affordances
+from interaction_tensor import affordances as registry
 from interaction_tensor.errors import InputError
+from interaction_tensor.geometry.files import atomic_dir
+from interaction_tensor.geometry.load import load_geometry
+from itensor_paper import labelled
+from itensor_paper.judge import Judge, JudgeScene, JudgeSettings
+from itensor_paper.pictures import run_sheet
+from itensor_paper.report import write_all
+from itensor_paper.runner import METHODS, EvalResult, metrics
 
 #: settings that may differ between the parts of one evaluation (the judge's labelled-set
 #: check need run in one part only; a part may itself be a merge)
@@ -84,7 +93,6 @@ def _judgement(row: dict, path: Path) -> dict:
 
 def load_run(directory) -> "EvalResult":
     """The records of one finished ``itensor evaluate`` run in ``directory``."""
-    from itensor_paper.runner import EvalResult
 
     d = Path(directory)
     if not d.is_dir():
@@ -142,8 +150,6 @@ def merge(directories, out_dir, log=print, allow=(), replace: bool = False) -> "
     method) it ran replace the earlier parts' (a method or some examples run again with new
     settings on the same scenes; the parts' ``methods`` and ``examples`` may then differ and
     are listed under ``per_part``, as is every key of ``allow``)."""
-    from itensor_paper.report import write_all
-    from itensor_paper.runner import METHODS, EvalResult, metrics
 
     dirs = [Path(p) for p in directories]
     if len(dirs) < 2:
@@ -202,7 +208,6 @@ def merge(directories, out_dir, log=print, allow=(), replace: bool = False) -> "
         res.settings["examples"] = sorted({r["example"] for r in res.runs})
     res.table = metrics(res.judgements, methods, res.runs)
 
-    from interaction_tensor.geometry.files import atomic_dir
 
     with atomic_dir(out_dir, "run.json") as tmp:
         write_all(res, tmp)
@@ -225,13 +230,6 @@ def rejudge(directory, out_dir, scenes_dir, objects_dir=None, affordances=None,
     judge's labelled-set accuracy measured again (unless ``judge_check`` is False). Nothing is
     detected again: the poses, scores and acceptances are the run's. ``out_dir`` is replaced
     only when complete. ``run.json`` records ``rejudged_from``."""
-    from interaction_tensor import affordances as registry
-    from interaction_tensor.geometry.files import atomic_dir
-    from interaction_tensor.geometry.load import load_geometry
-    from itensor_paper.judge import Judge, JudgeScene, JudgeSettings
-    from itensor_paper.pictures import run_sheet
-    from itensor_paper.report import write_all
-    from itensor_paper.runner import METHODS, metrics
 
     d = Path(directory)
     res = load_run(d)
@@ -264,7 +262,6 @@ def rejudge(directory, out_dir, scenes_dir, objects_dir=None, affordances=None,
     methods = tuple(m for m in METHODS if m in (st.get("methods") or METHODS))
     res.table = metrics(res.judgements, methods, res.runs)
     if judge_check and objects_dir:
-        from itensor_paper import labelled
 
         res.judge_accuracy = labelled.judge_accuracy(labelled.load(), objects_dir,
                                                      Path(objects_dir).parent)[0]
@@ -288,3 +285,34 @@ def rejudge(directory, out_dir, scenes_dir, objects_dir=None, affordances=None,
     log(f"judged {len(todo)} poses again ({len(changed)} (scene, example) pairs changed) "
         f"into {out_dir}")
     return res
+
+
+def redraw(eval_dir, scenes_dir, objects_dir=None, method: str = "iT-weighted",
+           log=print) -> int:
+    """Draw ``eval_dir/pictures/`` again from the poses in its ``judgements.csv`` (for runs
+    made before a change to these pictures, or merged from several machines); returns the
+    number of pictures drawn."""
+    from itensor_paper.merge import load_run
+
+    res = load_run(eval_dir)
+    objects_dir = objects_dir or res.settings.get("objects_dir")
+    runs: dict = {}
+    for r in res.judgements:
+        if r["method"] == method and r["group"] == "top":
+            runs.setdefault((r["scene"], r["example"]), []).append(r)
+    queries: dict = {}
+    count = 0
+    for scene in sorted({s for s, _ in runs}):
+        geom = load_geometry(Path(scenes_dir) / f"{scene}.ply")
+        for (s, example), rows in sorted(runs.items()):
+            if s != scene:
+                continue
+            if example not in queries:
+                queries[example] = affordances.build(example, objects_dir,
+                                                      res.settings.get("seed", 0)).query
+            rows = sorted(rows, key=lambda r: r["rank"])
+            run_sheet(Path(eval_dir) / "pictures" / f"{example}__{scene}.png", geom,
+                      queries[example], rows, example, scene, method)
+            count += 1
+        log(f"drew {scene}")
+    return count

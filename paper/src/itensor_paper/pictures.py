@@ -4,7 +4,7 @@ One panel per pose: the scene cut to a box around the posed query object, seen f
 that shows most of the object; when no side shows half of it, everything more than ``cut``
 (5 cm) nearer to the camera than the object is clipped away (a cabinet front or a wall), the
 object drawn green when the judge found it valid and red when not, with its rank, score and
-the judge's first reason. Drawn with the project's software renderer (:mod:`..viz.raster`):
+the judge's first reason. Drawn with the project's software renderer (:mod:`~interaction_tensor.outputs.raster`):
 no display or OpenGL needed.
 """
 
@@ -14,6 +14,15 @@ from pathlib import Path
 
 import numpy as np
 
+from interaction_tensor.geometry.files import atomic_path
+from interaction_tensor.geometry.sampling import (
+    estimate_normals,
+    mesh_area,
+    sample_mesh,
+)
+from interaction_tensor.outputs.raster import Canvas, frame_points
+from interaction_tensor.outputs.render import _font
+
 VALID = (40, 170, 70)
 INVALID = (215, 50, 40)
 SCENE = (150, 150, 160)
@@ -22,7 +31,6 @@ PANEL = (360, 300)
 
 def _samples(geometry, spacing: float, seed: int = 0, limit: int = 2_500_000):
     """Area samples of a mesh about ``spacing`` apart (at most ``limit``) and their normals."""
-    from interaction_tensor.geometry.sampling import estimate_normals, mesh_area, sample_mesh
 
     if not geometry.is_mesh:
         pts = np.asarray(geometry.vertices, float)
@@ -39,7 +47,6 @@ def closeup(scene_points, scene_normals, query_points, query_normals, pose, colo
     the object's size, at least 0.3 m, and 0.4 m above it: a tap over a mug) of it, from
     the side that sees most of it; the scene points that would still hide it (a cabinet
     door, a panel more than ``touch`` m in front of it) are left out."""
-    from interaction_tensor.outputs.raster import Canvas, frame_points
 
     rot, t = pose[:3, :3], pose[:3, 3]
     q = query_points @ rot.T + t
@@ -90,7 +97,6 @@ def _in_front(cam, scene_points, q, q_size: float, touch: float, halo_px: int = 
     within ``touch`` and stays."""
     from scipy.ndimage import minimum_filter
 
-    from interaction_tensor.outputs.raster import Canvas
 
     obj = Canvas(cam, supersample=1)
     obj.points(q, (0, 0, 0), size=q_size, lit=False)
@@ -111,8 +117,6 @@ def sheet(path, scene_geometry, query_geometry, poses, valid, captions, title: s
     """One PNG with a close-up per pose (up to 5 per row) under a title."""
     from PIL import Image, ImageDraw
 
-    from interaction_tensor.geometry.files import atomic_path
-    from interaction_tensor.outputs.render import _font
 
     sp, sn = _samples(scene_geometry, scene_spacing)
     qp, qn = _samples(query_geometry, 0.004)
@@ -154,34 +158,3 @@ def run_sheet(path, scene_geometry, query_geometry, rows: list, example: str, sc
                  "(green: judged valid, red: invalid)")
 
 
-def redraw(eval_dir, scenes_dir, objects_dir=None, method: str = "iT-weighted",
-           log=print) -> int:
-    """Draw ``eval_dir/pictures/`` again from the poses in its ``judgements.csv`` (for runs
-    made before a change to these pictures, or merged from several machines); returns the
-    number of pictures drawn."""
-    from interaction_tensor import affordances
-    from interaction_tensor.geometry.load import load_geometry
-    from itensor_paper.merge import load_run
-
-    res = load_run(eval_dir)
-    objects_dir = objects_dir or res.settings.get("objects_dir")
-    runs: dict = {}
-    for r in res.judgements:
-        if r["method"] == method and r["group"] == "top":
-            runs.setdefault((r["scene"], r["example"]), []).append(r)
-    queries: dict = {}
-    count = 0
-    for scene in sorted({s for s, _ in runs}):
-        geom = load_geometry(Path(scenes_dir) / f"{scene}.ply")
-        for (s, example), rows in sorted(runs.items()):
-            if s != scene:
-                continue
-            if example not in queries:
-                queries[example] = affordances.build(example, objects_dir,
-                                                      res.settings.get("seed", 0)).query
-            rows = sorted(rows, key=lambda r: r["rank"])
-            run_sheet(Path(eval_dir) / "pictures" / f"{example}__{scene}.png", geom,
-                      queries[example], rows, example, scene, method)
-            count += 1
-        log(f"drew {scene}")
-    return count

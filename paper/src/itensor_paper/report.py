@@ -6,7 +6,14 @@ from pathlib import Path
 
 import numpy as np
 
-from itensor_paper.common import AFFORDANCES, METHODS, PAPER, machine, write_csv, write_json
+from itensor_paper.common import (
+    AFFORDANCES,
+    METHODS,
+    PAPER,
+    machine,
+    write_csv,
+    write_json,
+)
 
 
 def _fmt(v) -> str:
@@ -209,7 +216,7 @@ def write_all(res, out: Path) -> None:
           "automatically\n",
           "Precision of the top 5, accuracy and F-score over the top and bottom 5, in %, per "
           "affordance, and the (scene, example) runs that accepted any prediction "
-          "(definitions in `interaction_tensor/evaluation/runner.py`).\n", table_markdown(rows),
+          "(definitions in `paper/src/itensor_paper/runner.py`).\n", table_markdown(rows),
           "", "## The top predictions each method accepted\n",
           "A top 5 holds the method's best pairs, accepted ones first; where it accepted fewer "
           "than 5 (a scene with no tap, no seat), rejected pairs fill it and count in the "

@@ -8,7 +8,7 @@ Protocol (after the paper's human-marker protocol, section 4.2):
   ``test_points`` instead draws a fixed number), kept when their normal line is within 15
   degrees of N_aff. iT scores every candidate, with the example's S_aff (tuned per affordance
   on the procedural validation scenes, :mod:`.tuning`) and the placement tests (clearance,
-  contact, interior: :mod:`..clearance`). Naive and BS,
+  contact, interior: :mod:`~interaction_tensor.placement.checks`). Naive and BS,
   whose ICP per pair is 100 x slower, score a seeded random subset of ``max_candidates``
   (Naive, 64) and ``max_bs_candidates`` (BS, 12) of the same candidates, in all 8
   orientations, seeing the scene at the density they were calibrated at.
@@ -16,7 +16,7 @@ Protocol (after the paper's human-marker protocol, section 4.2):
   pairs first (a method that accepts fewer than 5 still shows its 5 best); for iT, pairs
   passing the placement tests (the accepted pairs that would enter the top 5 tested for
   collision with the scene's triangles as well) before those failing them, then by full
-  score (rejected pairs are scored again in full, :func:`..detect.rank_pairs`, exactly); a
+  score (rejected pairs are scored again in full, :func:`~interaction_tensor.detection.ranking.rank_pairs`, exactly); a
   run of iT accepts a prediction when its best pair passes every test. **Bottom 5**: the 5 worst by
   full score, with the same suppression.
 * The judge (:mod:`.judge`, proven on the labelled set of :mod:`.labelled`, whose accuracy is
@@ -46,10 +46,24 @@ from pathlib import Path
 
 import numpy as np
 
-from interaction_tensor.errors import InputError
+import interaction_tensor as it
+from interaction_tensor import affordances
+from interaction_tensor.detection.places import top_k
+from interaction_tensor.detection.ranking import rank_pairs
+from interaction_tensor.detection.search import Engine, candidates, detect
 from interaction_tensor.engine.backends import CACHE_AUTO_FRACTION
-
+from interaction_tensor.errors import InputError
+from interaction_tensor.geometry.core import MESH_SUFFIXES
+from interaction_tensor.geometry.files import atomic_dir
+from itensor_paper import labelled
+from itensor_paper.baselines.bisector_icp import bisector_baseline
+from itensor_paper.baselines.common import capped_candidates
+from itensor_paper.baselines.icp import resolve_backend
+from itensor_paper.baselines.naive import naive
 from itensor_paper.common import AFFORDANCES, METHODS, ranking_radius  # noqa: F401 (METHODS: re-exported)
+from itensor_paper.judge import Judge, JudgeScene, JudgeSettings
+from itensor_paper.pictures import run_sheet
+from itensor_paper.report import write_all
 
 
 @dataclass
@@ -86,7 +100,6 @@ class EvalResult:
 
 def scene_files(paths) -> list[Path]:
     """PLY/OBJ/OFF/STL files among ``paths`` (files or directories), sorted by name."""
-    from interaction_tensor.geometry.core import MESH_SUFFIXES
 
     out = []
     for p in paths:
@@ -103,7 +116,6 @@ def scene_files(paths) -> list[Path]:
 
 
 def _select(positions, key, k, radius):
-    from interaction_tensor.detection.places import top_k
 
     return top_k(positions, key, k, radius)
 
@@ -129,9 +141,6 @@ def evaluate(scenes, out_dir, settings: EvalSettings | None = None, log=print) -
     settings : :class:`EvalSettings`
     log : callable(str) for progress lines (``lambda s: None`` for quiet)
     """
-    from itensor_paper.baselines.icp import resolve_backend
-    from interaction_tensor import affordances
-    from interaction_tensor.geometry.files import atomic_dir
 
     st = settings or EvalSettings()
     files = scene_files(scenes if isinstance(scenes, (list, tuple)) else [scenes])
@@ -148,14 +157,6 @@ def evaluate(scenes, out_dir, settings: EvalSettings | None = None, log=print) -
 
 
 def _run(files, names, st, icp_backend, out, log) -> EvalResult:
-    import interaction_tensor as it
-    from itensor_paper.baselines.bisector_icp import bisector_baseline
-    from itensor_paper.baselines.common import capped_candidates
-    from itensor_paper.baselines.naive import naive
-    from interaction_tensor.detection.search import Engine, candidates, detect
-    from interaction_tensor.detection.ranking import rank_pairs
-    from interaction_tensor import affordances
-    from itensor_paper.judge import Judge, JudgeScene, JudgeSettings
 
     res = EvalResult(settings={**asdict(st), "icp_backend": icp_backend,
                                "scenes": [f.name for f in files]})
@@ -163,7 +164,6 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
 
     # the judge's own accuracy on the labelled set (shared-scene cases when the data is there)
     # (its poses are of the examples built with the real query objects: --objects)
-    from itensor_paper import labelled
     if st.objects_dir and st.judge_check:
         poses = labelled.load()
         res.judge_accuracy, _ = labelled.judge_accuracy(poses, st.objects_dir,
@@ -285,7 +285,6 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                                     "pairs": int(len(acc)), "accepted": int(acc.sum()),
                                     "judge_seconds": round(time.perf_counter() - t2, 3)})
                 if st.pictures and m == "iT-weighted":
-                    from itensor_paper.pictures import run_sheet
 
                     run_sheet(out / "pictures" / f"{n}__{f.stem}.png", geom, ex.query, shown,
                               n, f.stem, m)
@@ -298,7 +297,6 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                 f"({time.perf_counter() - t0:.0f} s into the scene)")
     res.settings["total_seconds"] = round(time.perf_counter() - t_all, 1)
     res.table = metrics(res.judgements, st.methods, res.runs)
-    from itensor_paper.report import write_all
 
     write_all(res, out)
     return res

@@ -2,9 +2,10 @@
 
 An evaluation (``itensor paper evaluate``, ``merge``, ``rejudge``) writes its whole output into
 a git-ignored folder; :func:`write_summary` copies the current figures out of it into the
-tracked ``paper/results/``, overwriting what was there: Table 1 (Markdown and CSV), the judge's
-accuracy on its labelled poses and one picture per affordance (the run's close-up sheet of
-iT's example and scene whose top 5 the judge finds valid most often; ties by name).
+tracked ``paper/results/``, overwriting what was there: Table 1 (Markdown and CSV, written
+afresh from the run's verdicts by the current report), the judge's accuracy on its labelled
+poses and one picture per affordance (the run's close-up sheet of iT's example and scene
+whose top 5 the judge finds valid most often; ties by name).
 """
 
 from __future__ import annotations
@@ -15,6 +16,9 @@ from pathlib import Path
 
 from interaction_tensor.errors import InputError
 from interaction_tensor.geometry.files import atomic_dir
+from itensor_paper.merge import load_run
+from itensor_paper.report import write_all
+from itensor_paper.runner import METHODS, metrics
 
 #: The files of a run the summary copies, as they are named there -> in the summary.
 COPIED = {"table1.md": "table1.md", "table1.csv": "table1.csv",
@@ -57,8 +61,14 @@ def write_summary(run, out) -> Path:
     keep = {name: (out / name).read_bytes() for name in ALSO if (out / name).exists()}
     allowed = tuple(COPIED.values()) + ALSO + ("pictures",)
     with atomic_dir(out, "table1.md", allowed) as tmp:
+        tables = tmp / ".tables"
+        res = load_run(run)
+        methods = tuple(m for m in METHODS if any(j["method"] == m for j in res.judgements))
+        res.table = metrics(res.judgements, methods, res.runs)
+        write_all(res, tables)
         for src, dst in COPIED.items():
-            shutil.copyfile(run / src, tmp / dst)
+            shutil.copyfile(tables / src, tmp / dst)
+        shutil.rmtree(tables)
         for name, data in keep.items():
             (tmp / name).write_bytes(data)
         (tmp / "pictures").mkdir()

@@ -1,9 +1,9 @@
 """Tune the acceptance of each affordance on the procedural validation scenes.
 
 The paper tuned S_aff by hand per affordance. Here the whole acceptance (S_aff and the
-placement tests of :mod:`..clearance`: the clearance limit, the interior limit and the
+placement tests of :mod:`~interaction_tensor.placement.checks`: the clearance limit, the interior limit and the
 contact test) is chosen by measurement, on scenes that are not the 14 published ones
-(:mod:`..examples.validation`: living rooms, kitchens, offices and a garage with chairs,
+(:mod:`.rooms.validation`: living rooms, kitchens, offices and a garage with chairs,
 sofas, beds, benches, rails, pegs, taps, a motorbike-like frame...), with the judge
 (:mod:`.judge`, itself proven on :mod:`.labelled`) as the label:
 
@@ -23,13 +23,13 @@ sofas, beds, benches, rails, pegs, taps, a motorbike-like frame...), with the ju
    the pair decisions are compared with the judge: precision, recall and F1, estimated with
    the sample weights, pooled over each affordance's examples and scenes;
 4. the placement tests are chosen by what Table 1 counts (``TuneSettings.objective``
-   ``top``, since 2026-11-26): of the ``top_candidates`` placement tests of largest F1
+   ``top``): of the ``top_candidates`` placement tests of largest F1
    (each at its best threshold), the one whose top 5 per (scene, example) are most often
    valid to the judge, ranked as the evaluation ranks them (:func:`table_top`: the pairs
    that pass the placement and exact collision tests by score, a suppression radius apart,
    then the others; the threshold plays no part in that ranking); ties: larger F1, then the
    stricter threshold and the simpler tests. S_aff is that test's best threshold by F1.
-   With objective ``f1`` (before 2026-11-26) the acceptance of largest F1 is kept. The top
+   With objective ``f1`` the acceptance of largest F1 is kept. The top
    5 under the choice are reported with the judged pairs (``top`` set, weight 0: not in the
    estimate).
 
@@ -44,11 +44,30 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+import interaction_tensor as it
+from interaction_tensor import affordances
+from interaction_tensor.affordances import acceptances
+from interaction_tensor.detection.places import top_k
+from interaction_tensor.detection.ranking import collision_check, ranked_with_check
 from interaction_tensor.detection.search import Engine, detect
-from interaction_tensor.settings import PLACEMENT_TESTS
-from itensor_paper.common import ranking_radius
+from interaction_tensor.engine.numba_backend import available as kernels_available
+from interaction_tensor.geometry.files import atomic_dir
+from interaction_tensor.placement.checks import (
+    CLEARANCE_TOLERANCE,
+    INTERIOR_TOLERANCE,
+    PLACED,
+    check_placements,
+    clearance_offsets,
+    contact_fractions,
+    count_violations,
+    interior_violations,
+)
+from interaction_tensor.settings import PLACEMENT_TESTS, DetectSettings
+from itensor_paper.common import ranking_radius, write_csv, write_json
+from itensor_paper.judge import Judge, JudgeScene
+from itensor_paper.rooms import validation
 
-#: Site kind of each affordance (:mod:`..examples.furniture`).
+#: Site kind of each affordance (:mod:`.rooms.furniture`).
 SITE_OF = {"placing": "place", "sitting": "seat", "hanging": "hang", "filling": "fill",
            "riding": "astride"}
 THRESHOLDS = tuple(np.round(np.r_[np.arange(0.02, 0.30, 0.01), np.arange(0.30, 0.951, 0.025)],
@@ -69,10 +88,10 @@ CONTACT_OPTIONS = (("off", CONTACT_DISTANCES[0], CONTACT_FRACTIONS[0], 90.0),) +
     for f in CONTACT_FRACTIONS)
 #: The placement tests not tuned here (each chosen on the labelled set:
 #: ``scripts/choose_collision.py``), taken from the affordance's acceptance
-#: (:data:`..examples.ACCEPTANCE`) and applied as detection does: the ground,
+#: (:data:`~interaction_tensor.affordances.acceptances`) and applied as detection does: the ground,
 #: feet, straddle and mount tests to every pair (column ``fixed``), the exact collision and
 #: through-the-hook tests to the pairs judged and ranked (column ``free``,
-#: :class:`..detect.CollisionCheck`).
+#: :class:`~interaction_tensor.detection.ranking.CollisionCheck`).
 FIXED_TESTS = ("below_ground", "feet_reach", "straddle", "mount_height", "collision",
                "through")
 #: The most lenient placement tests tried: the stratification's second key.
@@ -107,8 +126,7 @@ class TuneSettings:
     per_band_rest: int = 3
     top_k: int = 5
     seed: int = 0
-    #: apply each affordance's :data:`FIXED_TESTS` first (False: as before 2026-11-26, when
-    #: the acceptance was tuned without them)
+    #: apply each affordance's :data:`FIXED_TESTS` first (False: tune without them)
     fixed_tests: bool = True
     #: ``top``: the placement tests whose validation top 5 are most often valid, among the
     #: ``top_candidates`` of largest F1 (Table 1's measure); ``f1``: the largest F1
@@ -165,11 +183,6 @@ class _Run:
 def _features(det, tensor, scene, grid) -> dict:
     """The pair columns of :data:`COLUMNS` for every pair of a detection; ``fixed``: the
     pair passes the descriptor's :data:`FIXED_TESTS` (those it has)."""
-    from interaction_tensor.placement.checks import (CLEARANCE_TOLERANCE, INTERIOR_TOLERANCE,
-                                                     PLACED, check_placements, clearance_offsets,
-                                                     contact_fractions, count_violations,
-                                                     interior_violations)
-    from interaction_tensor.settings import DetectSettings
 
     pts = scene.points[det.pair_point]
     orient = np.asarray(det.pair_orientation, np.int64)
@@ -223,12 +236,6 @@ def _columns(rows: list) -> dict:
 
 def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
     """Run the tuning (module docstring) and choose the acceptance of each affordance."""
-    import interaction_tensor as it
-    from interaction_tensor.detection.ranking import collision_check
-    from interaction_tensor import affordances
-    from itensor_paper.rooms import validation
-    from interaction_tensor.engine.numba_backend import available as kernels_available
-    from itensor_paper.judge import Judge, JudgeScene
 
     st = settings or TuneSettings()
     names = list(st.examples) or affordances.example_names()
@@ -331,14 +338,12 @@ def _value(v):
 
 
 def table_top(position, score, placed, k: int, radius: float, check=None):
-    """The top ``k`` of one run as the evaluation ranks them (:func:`..detect.rank_pairs`):
+    """The top ``k`` of one run as the evaluation ranks them (:func:`~interaction_tensor.detection.ranking.rank_pairs`):
     the pairs that pass the placement tests (``placed``) and, with ``check`` (a
-    :class:`..detect.CollisionCheck`, by pair index), the exact collision tests, by score,
+    :class:`~interaction_tensor.detection.ranking.CollisionCheck`, by pair index), the exact collision tests, by score,
     ``radius`` apart; then the other pairs by score, with them the placed pairs that could
     not be tested (the check answers None: its tests are spent); last those that cross the
     scene. Returns pair indices, best first."""
-    from interaction_tensor.detection.ranking import ranked_with_check
-    from interaction_tensor.detection.places import top_k
 
     score = np.asarray(score, float)
     position = np.asarray(position, float)
@@ -351,7 +356,7 @@ def table_top(position, score, placed, k: int, radius: float, check=None):
 
 
 class RankingCheck:
-    """One ranking's view of a run's :class:`..detect.CollisionCheck`, as a detection's own
+    """One ranking's view of a run's :class:`~interaction_tensor.detection.ranking.CollisionCheck`, as a detection's own
     ranking would have it: the verdicts are shared (each pair is tested once for all the
     candidates of the tuning), the tests allowed (``budget`` distinct pairs asked) are this
     ranking's own; past them :meth:`free` answers None and ``exhausted`` is set. ``state``:
@@ -403,8 +408,6 @@ class _TopJudge:
         self.cache = {}
 
     def valid(self, run, i) -> tuple:
-        from itensor_paper.rooms import validation
-        from itensor_paper.judge import JudgeScene
 
         key = (run.scene, run.example, int(i))
         if key not in self.cache:
@@ -432,7 +435,6 @@ def choose_by_tops(res: TuneResult, runs: list, verdicts: _TopJudge, st: TuneSet
     """Re-choose each affordance's placement tests by Table 1's measure (module docstring,
     step 4): ``res.chosen[aff]`` becomes the candidate of most valid top poses, with its
     top-5 counts; ``res.top_objective[aff]`` lists every candidate's."""
-    from interaction_tensor.affordances import acceptances
     ACCEPTANCE = acceptances()
 
     for aff, ch in list(res.chosen.items()):
@@ -506,11 +508,10 @@ def curve(rows, thresholds=THRESHOLDS, limit: float = 1.0, interior_limit: float
     against the judge, from judged ``rows`` (dicts, or the columns of :func:`_columns`).
 
     Both are Horvitz-Thompson estimates over every pair. A rare valid pair drawn from a large
-    background stratum stands for thousands of pairs (hanging, 2026-11-25: one hanger at
-    score 0.07 for 93,606 of the 105,153 valid pairs), which holds every recall of that
-    affordance low; recall over the near-site pairs only was tried and chose far looser
-    acceptances (placing at S_aff 0.02, riding at 52 % precision), so the plain estimate
-    stays."""
+    background stratum stands for thousands of pairs (hanging: one hanger at score 0.07 for
+    93,606 of the 105,153 valid pairs), which holds every recall of that affordance low;
+    recall over the near-site pairs alone chooses far looser acceptances (placing at S_aff
+    0.02, riding at 52 % precision)."""
     f = rows if isinstance(rows, dict) else _columns(rows)
     w, v = f["weight"].astype(float), f["valid"].astype(bool)
     total_valid = float((w * v).sum())
@@ -531,10 +532,9 @@ def curve(rows, thresholds=THRESHOLDS, limit: float = 1.0, interior_limit: float
 
 def shipped_thresholds(rows: list) -> dict:
     """Per affordance, the S_aff of largest F1 (ties: the stricter) for the placement tests
-    it ships with (:data:`..examples.ACCEPTANCE`: clearance limit, interior
+    it ships with (:data:`~interaction_tensor.affordances.acceptances`: clearance limit, interior
     limit, contact test), from judged ``rows``: how a criterion's threshold is chosen once
     the tests are fixed (the gaussian criterion's, for captured scenes)."""
-    from interaction_tensor.affordances import acceptances
     ACCEPTANCE = acceptances()
 
     out = {}
@@ -625,8 +625,6 @@ def _pct(x) -> str:
 def write(res: TuneResult, out_dir) -> None:
     """``tuning_pairs.csv`` (every judged pair), ``tuning.json`` (runs, curves, choice) and
     ``tuning.md`` (the chosen acceptance, and the best one without the new tests)."""
-    from interaction_tensor.geometry.files import atomic_dir
-    from itensor_paper.common import write_csv, write_json
 
     with atomic_dir(out_dir, "tuning.json") as out:
         write_csv(out / "tuning_pairs.csv", res.rows, COLUMNS)

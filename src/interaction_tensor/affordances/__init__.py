@@ -11,11 +11,27 @@ code): see ``docs/architecture.md``.
 """
 
 from interaction_tensor.affordances import filling, hanging, placing, riding, sitting
-from interaction_tensor.affordances.registry import (DOWN, UP, Affordance, Example, ExampleSpec,
-                                                     JudgeRule, Posed, acceptance, acceptances, build,
-                                                     build_descriptor, example_names, get, names,
-                                                     of, register, spec, train_settings,
-                                                     unregister)
+from interaction_tensor.affordances.registry import (
+    DOWN,
+    UP,
+    Affordance,
+    Example,
+    ExampleSpec,
+    JudgeRule,
+    Posed,
+    acceptance,
+    acceptances,
+    build,
+    build_descriptor,
+    example_names,
+    get,
+    names,
+    of,
+    register,
+    spec,
+    train_settings,
+    unregister,
+)
 
 for _module in (filling, placing, hanging, sitting, riding):
     register(_module.AFFORDANCE)

@@ -7,8 +7,13 @@ training.
 
 from __future__ import annotations
 
-from interaction_tensor.affordances.registry import (DOWN, Affordance, ExampleSpec, JudgeRule,
-                                                     Posed)
+from interaction_tensor.affordances.registry import (
+    DOWN,
+    Affordance,
+    ExampleSpec,
+    JudgeRule,
+    Posed,
+)
 from interaction_tensor.examples import shapes
 from interaction_tensor.examples.posing import pose_on
 from interaction_tensor.geometry.core import Geometry

@@ -8,7 +8,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from interaction_tensor.affordances.registry import UP, Affordance, ExampleSpec, JudgeRule, Posed
+from interaction_tensor.affordances.registry import (
+    UP,
+    Affordance,
+    ExampleSpec,
+    JudgeRule,
+    Posed,
+)
 from interaction_tensor.examples import shapes
 from interaction_tensor.examples.posing import drop_onto, surface_points, translated
 from interaction_tensor.geometry.core import Geometry

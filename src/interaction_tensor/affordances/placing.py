@@ -5,7 +5,13 @@ The paper's examples are a bowl and a bottle on a table top.
 
 from __future__ import annotations
 
-from interaction_tensor.affordances.registry import UP, Affordance, ExampleSpec, JudgeRule, Posed
+from interaction_tensor.affordances.registry import (
+    UP,
+    Affordance,
+    ExampleSpec,
+    JudgeRule,
+    Posed,
+)
 from interaction_tensor.examples import procedural, shapes
 from interaction_tensor.examples.posing import pose_on
 from interaction_tensor.geometry.core import Geometry

@@ -28,17 +28,43 @@ Open3D (``pip install 'interaction-tensor[open3d]'``) is needed for down-samplin
 removal, normals and plane fitting; it is imported lazily. Images are read with Pillow.
 """
 
-from interaction_tensor.capture.alignment import (AXES, CAMERA_UP, Plane, alignment_transform,  # noqa: F401
-                        candidate_planes, choose_support_plane, fit_plane, gravity_align,
-                        rotation_between, rotation_between_frames)
-from interaction_tensor.capture.cleaning import (estimate_normals_o3d, orient_normals,  # noqa: F401
-                       remove_statistical_outliers, voxel_down_sample)
+from interaction_tensor.capture.alignment import (  # noqa: F401
+                        AXES,
+                        CAMERA_UP,
+                        Plane,
+                        alignment_transform,
+                        candidate_planes,
+                        choose_support_plane,
+                        fit_plane,
+                        gravity_align,
+                        rotation_between,
+                        rotation_between_frames,
+)
+from interaction_tensor.capture.cleaning import (  # noqa: F401
+                        estimate_normals_o3d,
+                        orient_normals,
+                        remove_statistical_outliers,
+                        voxel_down_sample,
+)
 from interaction_tensor.capture.outputs import write_input_frame_outputs  # noqa: F401
-from interaction_tensor.capture.pipeline import (PLAUSIBLE_EXTENT_M, RealSceneReport, prepare_real_scene,  # noqa: F401
-                       unit_warnings)
-from interaction_tensor.capture.rgbd import (DEFAULT_DEPTH_SCALE, DEFAULT_DEPTH_TRUNC, Intrinsics,  # noqa: F401
-                   back_project, depth_faces, load_intrinsics, load_rgbd, read_color, read_depth,
-                   rgbd_to_geometry)
+from interaction_tensor.capture.pipeline import (  # noqa: F401
+                        PLAUSIBLE_EXTENT_M,
+                        RealSceneReport,
+                        prepare_real_scene,
+                        unit_warnings,
+)
+from interaction_tensor.capture.rgbd import (  # noqa: F401
+                        DEFAULT_DEPTH_SCALE,
+                        DEFAULT_DEPTH_TRUNC,
+                        Intrinsics,
+                        back_project,
+                        depth_faces,
+                        load_intrinsics,
+                        load_rgbd,
+                        read_color,
+                        read_depth,
+                        rgbd_to_geometry,
+)
 
 __all__ = [
     "AXES", "CAMERA_UP", "Plane", "alignment_transform", "candidate_planes",

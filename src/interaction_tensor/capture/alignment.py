@@ -9,8 +9,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from interaction_tensor.errors import InputError, SettingsError
 from interaction_tensor.capture.cleaning import _cloud, _open3d, voxel_down_sample
+from interaction_tensor.errors import InputError, SettingsError
 
 #: Optical camera frame: +x right, +y down, +z forward. "Up" for a camera held level.
 CAMERA_UP = np.array([0.0, -1.0, 0.0])

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from interaction_tensor.geometry.files import write_json, write_mesh, write_ply_points
 from interaction_tensor.capture.pipeline import RealSceneReport
+from interaction_tensor.geometry.files import write_json, write_mesh, write_ply_points
+from interaction_tensor.outputs.export import heat_colors, heat_properties
 
 
 # ============================================================================ outputs
@@ -30,7 +31,6 @@ def write_input_frame_outputs(detection, outdir, transform, report: RealSceneRep
 
     Returns the document written to ``predictions_input_frame.json``.
     """
-    from interaction_tensor.outputs.export import heat_colors, heat_properties
 
     outdir = Path(outdir)
     outdir.mkdir(parents=True, exist_ok=True)

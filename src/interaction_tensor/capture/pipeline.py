@@ -10,11 +10,22 @@ from pathlib import Path
 
 import numpy as np
 
+from interaction_tensor.capture.alignment import (
+    _up_hint,
+    gravity_align,
+    rotation_between,
+    rotation_between_frames,
+)
+from interaction_tensor.capture.cleaning import (
+    estimate_normals_o3d,
+    orient_normals,
+    remove_statistical_outliers,
+    voxel_down_sample,
+)
 from interaction_tensor.errors import InputError, SettingsError
 from interaction_tensor.geometry.core import Geometry, validate_geometry
-from interaction_tensor.capture.alignment import _up_hint, gravity_align, rotation_between, rotation_between_frames
-from interaction_tensor.capture.cleaning import (estimate_normals_o3d, orient_normals, remove_statistical_outliers,
-                       voxel_down_sample)
+from interaction_tensor.geometry.sampling import mean_spacing, mesh_area, sample_mesh
+from interaction_tensor.geometry.scene import Scene
 
 #: Largest scene extent (m) that does not trigger the "wrong units?" warning.
 PLAUSIBLE_EXTENT_M = 30.0
@@ -151,8 +162,6 @@ def prepare_real_scene(geometry: Geometry, spacing: float = 0.01, camera=None, *
     scene : Scene in the aligned frame (metres, +Z up, plane at z = 0), normals oriented
     report : :class:`RealSceneReport` (transform input -> aligned, steps, seconds, colours)
     """
-    from interaction_tensor.geometry.scene import Scene
-    from interaction_tensor.geometry.sampling import mean_spacing, mesh_area, sample_mesh
 
     _check_range("spacing", spacing, 0.0, math.inf, low_open=True)
     _check_range("voxel_size", voxel_size, 0.0, 1.0, none_ok=True)

@@ -1,6 +1,6 @@
 """What every ``itensor`` subcommand module shares: the parser class (defaults shown in
-``--help``), option types, common options and printing helpers. Imported by :mod:`.cli`,
-:mod:`.cli_viz` and :mod:`.cli_eval`; it imports none of them."""
+``--help``), option types, common options and printing helpers. Imported by :mod:`.main`,
+:mod:`.viz` and :mod:`.examples`; it imports none of them."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import math
 import sys
 from pathlib import Path
 
+from interaction_tensor import affordances
 from interaction_tensor.errors import InputError
 
 
@@ -140,7 +141,6 @@ def objects_dir(path):
 
 
 def examples_option(names):
-    from interaction_tensor import affordances
 
     if not names:
         return ()

@@ -7,12 +7,19 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from interaction_tensor.cli.common import _spacing, examples_option, objects_dir, quiet_option, seed_option
+from interaction_tensor import affordances
+from interaction_tensor.cli.common import (
+    _spacing,
+    examples_option,
+    objects_dir,
+    quiet_option,
+    seed_option,
+)
 from interaction_tensor.errors import InputError
+from interaction_tensor.geometry.files import write_json, write_mesh, write_ply_points
 
 
 def cmd_examples_list(args) -> int:
-    from interaction_tensor import affordances
 
     for name in affordances.example_names():
         sp = affordances.spec(name)
@@ -24,8 +31,6 @@ def cmd_examples_list(args) -> int:
 
 
 def cmd_examples_build(args) -> int:
-    from interaction_tensor import affordances
-    from interaction_tensor.geometry.files import write_json, write_mesh, write_ply_points
 
     out = Path(args.output)
     if out.exists() and not out.is_dir():

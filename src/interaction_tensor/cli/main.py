@@ -15,17 +15,36 @@ import sys
 import time
 from pathlib import Path
 
+from interaction_tensor import affordances
 from interaction_tensor._version import __version__
-from interaction_tensor.errors import InputError, ItensorError, SettingsError
-from interaction_tensor.settings import (BACKENDS, CRITERIA, KEYPOINT_SETS, PLACEMENT_TESTS,
-                                         DetectSettings)
-
-
+from interaction_tensor.api import detect, load_tensor, train
+from interaction_tensor.batch import batch
+from interaction_tensor.cli.common import (  # noqa: F401
+    Parser,
+    _axis_or_vector,
+    _fraction,
+    _out_path,
+    _say,
+    _show_progress,
+    _spacing,
+    _vector,
+    number,
+    quiet_option,
+    seed_option,
+)
 from interaction_tensor.cli.examples import register as register_examples
 from interaction_tensor.cli.viz import register as register_viz
-from interaction_tensor.cli.common import (Parser, _axis_or_vector, _fraction, _out_path, _say,  # noqa: F401
-                         _show_progress, _spacing, _vector, number, quiet_option,
-                         seed_option)
+from interaction_tensor.descriptor.tensor import InteractionTensor
+from interaction_tensor.errors import InputError, ItensorError, SettingsError
+from interaction_tensor.examples import demo
+from interaction_tensor.geometry.files import write_mesh
+from interaction_tensor.settings import (
+    BACKENDS,
+    CRITERIA,
+    KEYPOINT_SETS,
+    PLACEMENT_TESTS,
+    DetectSettings,
+)
 
 
 def _geometry_options(p: argparse.ArgumentParser) -> None:
@@ -142,7 +161,6 @@ def real_scene_options(parser) -> None:
 
 # --------------------------------------------------------------------------- train
 def cmd_train(args) -> int:
-    from interaction_tensor.api import train
 
     t0 = time.perf_counter()
     tensor = train(args.query, args.scene_object, args.affordance, acceptance=args.acceptance,
@@ -282,7 +300,6 @@ def summary(result, outdir) -> dict:
 
 
 def cmd_detect(args) -> int:
-    from interaction_tensor.api import detect, load_tensor
 
     tensor = load_tensor(args.descriptor)
     options = scene_options(args)
@@ -313,7 +330,6 @@ def cmd_detect(args) -> int:
 
 # --------------------------------------------------------------------------- batch
 def cmd_batch(args) -> int:
-    from interaction_tensor.batch import batch
 
     if args.workers is not None and args.workers < 0:
         raise SettingsError(f"--workers must be 0 (this process) or more, got {args.workers}")
@@ -341,7 +357,6 @@ def cmd_batch(args) -> int:
 
 # --------------------------------------------------------------------------- info
 def cmd_info(args) -> int:
-    from interaction_tensor.descriptor.tensor import InteractionTensor
 
     tensor = InteractionTensor.load(args.descriptor)
     summary = tensor.summary()
@@ -364,9 +379,6 @@ def cmd_info(args) -> int:
 
 # --------------------------------------------------------------------------- demo
 def cmd_demo(args) -> int:
-    from interaction_tensor.api import detect, train
-    from interaction_tensor.examples import demo
-    from interaction_tensor.geometry.files import write_mesh
 
     outdir = _out_path(args.output)
     t0 = time.perf_counter()
@@ -425,8 +437,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="height (m) of the floor the example stands on, where the interaction "
                         "needs it (a seated person's feet): the clearance and contact tests "
                         "then count it")
-    p.add_argument("--acceptance", choices=("placing", "filling", "hanging", "sitting", "riding"),
-                   default=None,
+    p.add_argument("--acceptance", choices=tuple(affordances.acceptances()), default=None,
                    help="accept as the paper's affordance does (S_aff, clearance, interior and "
                         "contact tests tuned on validation scenes) instead of 0.9 x the "
                         "example's own score")
@@ -545,7 +556,7 @@ def _one_shot_memory() -> None:
     - No transparent huge pages under NumPy's arrays (NumPy asks for them under every
       array of 4 MB or more; Linux backs a touched 2 MB range whole, and collapses ranges
       in the background): with them the same detection of a 2 M-point cloud peaked at
-      488-490 MB in four runs and 622 MB in a fifth (2026-11-25), without them at 475 MB
+      488-490 MB in four runs and 622 MB in a fifth, without them at 475 MB
       in every run. The scene's points and normals, read at random by every query, still
       get them (:func:`scene.hot_copy`).
 

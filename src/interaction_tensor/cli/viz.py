@@ -10,10 +10,10 @@ import time
 
 from interaction_tensor.cli.common import number, quiet_option
 from interaction_tensor.errors import InputError
+from interaction_tensor.outputs import render_outdir, render_tensor, write_viewer
 
 
 def cmd_view(args) -> int:
-    from interaction_tensor.outputs import write_viewer
 
     if args.max_points < 1000:
         raise InputError(None, f"--max-points must be at least 1000, got {args.max_points}")
@@ -26,7 +26,6 @@ def cmd_view(args) -> int:
 
 
 def cmd_show(args) -> int:
-    from interaction_tensor.outputs import render_tensor
 
     t0 = time.perf_counter()
     path = render_tensor(args.descriptor, args.render)
@@ -36,7 +35,6 @@ def cmd_show(args) -> int:
 
 
 def cmd_render(args) -> int:
-    from interaction_tensor.outputs import render_outdir
 
     t0 = time.perf_counter()
     path = render_outdir(args.outdir, args.output, top_k=args.top_k)

@@ -16,7 +16,6 @@ from scipy.spatial import Delaunay, Voronoi
 
 from interaction_tensor.errors import InputError
 
-
 #: Relative size of the seeded jitter added before qhull: coplanar samples (a table top) make
 #: qhull's exact-arithmetic merging very slow; a jitter of 1e-7 of the extent (0.1 um on a
 #: metre) removes the degeneracy without moving anything measurably.

@@ -18,12 +18,30 @@ from scipy.spatial import cKDTree
 
 from interaction_tensor._version import __version__
 from interaction_tensor.descriptor.bisector import bisector_points, trim_to_sphere
+from interaction_tensor.engine.scoring import (
+    KeypointTable,
+    make_table,
+    score_pairs,
+    surface_vectors,
+)
 from interaction_tensor.errors import InputError
+from interaction_tensor.geometry.collision import (
+    Body,
+    part_above,
+    polygon,
+    through_section,
+)
 from interaction_tensor.geometry.core import Geometry, validate_geometry
 from interaction_tensor.geometry.files import atomic_path
-from interaction_tensor.geometry.sampling import (mean_spacing, mesh_area, sample_mesh, uniform_keypoints,
-                       weighted_keypoints, estimate_normals)
-from interaction_tensor.engine.scoring import KeypointTable, make_table, score_pairs, surface_vectors
+from interaction_tensor.geometry.sampling import (
+    estimate_normals,
+    mean_spacing,
+    mesh_area,
+    sample_mesh,
+    uniform_keypoints,
+    weighted_keypoints,
+    winding_numbers,
+)
 from interaction_tensor.geometry.scene import Scene
 from interaction_tensor.settings import MIN_SPACING, DetectSettings, TrainSettings
 
@@ -82,7 +100,6 @@ def _check_not_overlapping(query, scene_object, q_pts, q_nrm, gaps, spacing: flo
     n_pts = 0 if faces is None else min(2000, MAX_WINDING_TERMS // (2 * max(len(faces), 1)))
     if q_nrm is None or n_pts < 100 or not _closed(faces):
         return
-    from interaction_tensor.geometry.sampling import winding_numbers
 
     rng = np.random.default_rng(seed)
     pick = (np.arange(len(q_pts)) if len(q_pts) <= n_pts
@@ -164,7 +181,7 @@ class InteractionTensor:
         relative to the reference point, turning with the placement): the scene must have
         a sample in the ``astride`` box (something going on between the legs ahead of the
         seat) and none in a ``legroom`` box (room for a leg on each side)
-        (:func:`.clearance.straddle_passes`)
+        (:func:`~interaction_tensor.placement.checks.straddle_passes`)
     mount_height : detection rejects a placement whose reference point (a rider's seat) is
         more than this (m) above the scene's ground (the lowest scene sample within 1.5 m):
         no one climbs astride the top of a 2.4 m wall; None: no such test
@@ -317,7 +334,6 @@ class InteractionTensor:
         if "_collision_bodies" not in self.__dict__:
             bodies = []
             if len(self.query_faces):
-                from interaction_tensor.geometry.collision import Body, part_above
 
                 for depth, above in self.collision_tests:
                     v, faces = part_above(self.query_vertices, self.query_faces,
@@ -334,7 +350,6 @@ class InteractionTensor:
         if not self.through or len(self.through_section) < 3:
             return None
         if "_through_body" not in self.__dict__:
-            from interaction_tensor.geometry.collision import Body, polygon
 
             self.__dict__["_through_body"] = Body(*polygon(self.through_section))
         return self.__dict__["_through_body"]
@@ -849,7 +864,7 @@ def validate_descriptor(path, header: dict, arrays: dict):
             tests = collision_tests(header["collision_tests"])
         except (TypeError, ValueError) as exc:
             bad("collision_tests", str(exc))
-    else:       # files of 2026-11-25: one test as collision_depth, collision_above
+    else:       # format 3 files with one test, as collision_depth and collision_above
         depth, above = header.get("collision_depth"), header.get("collision_above")
         if depth is not None:
             depth = number("collision_depth", 0.0, 1.0)
@@ -901,9 +916,8 @@ THROUGH_SAMPLES = 40_000
 THROUGH_GAP = 0.25
 #: How much (in training spacings) of the through section's top is left out: a surface that
 #: only grazes the top of the opening (a hook pushed up into a board's underside) does not
-#: reach the rest. Chosen on the judge's labelled set by ``scripts/choose_through_band.py``
-#: (docs/results/collision/through_band.md): the smallest band that rejects every hanging
-#: pose it can while keeping every valid one.
+#: reach the rest. Chosen on the judge's labelled set (``paper/scripts/choose_through_band.py``):
+#: the smallest band that rejects every hanging pose it can while keeping every valid one.
 THROUGH_BAND = 0.25
 
 
@@ -920,7 +934,6 @@ def through_section_of(query: Geometry, scene_object: Geometry, settings: TrainS
     (a hook's inside is a few millimetres thick: the detection spacing would miss it): the
     opening widened by the training spacing, kept :data:`THROUGH_GAP` spacings from the
     query's surface, less its top ``band`` spacings (by default :data:`THROUGH_BAND`)."""
-    from interaction_tensor.geometry.collision import through_section
 
     s = settings.scene_spacing
     lo, hi = query.vertices.min(axis=0) - s, query.vertices.max(axis=0) + s
@@ -1054,7 +1067,6 @@ def _interior_samples(query: Geometry, settings: TrainSettings):
     if len(inside) and len(inside) * len(faces) <= MAX_WINDING_TERMS:
         # confirmed by the winding number (exact for closed meshes, unions of closed parts
         # included), which only the few points kept can afford
-        from interaction_tensor.geometry.sampling import winding_numbers
 
         sure = winding_numbers(inside, query.vertices, faces) > 0.5
         inside, depth = inside[sure], depth[sure]

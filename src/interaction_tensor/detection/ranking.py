@@ -14,8 +14,12 @@ from interaction_tensor.detection.result import Detection
 from interaction_tensor.engine.backends import resolve_backend
 from interaction_tensor.engine.numba_backend import score_pairs_numba
 from interaction_tensor.engine.scoring import score_pairs
-from interaction_tensor.placement.checks import (FAILS_COLLISION, PLACED, UNTESTED,
-                                                 check_placements)
+from interaction_tensor.placement.checks import (
+    FAILS_COLLISION,
+    PLACED,
+    UNTESTED,
+    check_placements,
+)
 
 
 class CollisionCheck:
@@ -29,7 +33,7 @@ class CollisionCheck:
     (:attr:`~.InteractionTensor.through`), the scene crosses the posed section of what went
     through the query in the example (a rail through the hook). Each pair is tested at most
     once (``state``: -1 untested, 0 passes, 1 fails); a pair that fails loses its acceptance
-    (``placement`` :data:`.clearance.FAILS_COLLISION`). At most
+    (``placement`` :data:`~interaction_tensor.placement.checks.FAILS_COLLISION`). At most
     ``Engine.collision_max_tests`` pairs are tested; :meth:`free` answers None once they
     are spent.
     """

@@ -15,7 +15,12 @@ from interaction_tensor.descriptor.tensor import InteractionTensor
 from interaction_tensor.engine.scoring import PairScores
 from interaction_tensor.geometry.files import atomic_dir
 from interaction_tensor.geometry.scene import Scene
-from interaction_tensor.outputs.export import OUTPUT_NAMES, export, result_open3d, result_scene
+from interaction_tensor.outputs.export import (
+    OUTPUT_NAMES,
+    export,
+    result_open3d,
+    result_scene,
+)
 from interaction_tensor.outputs.render import render_outdir
 from interaction_tensor.settings import DetectSettings
 
@@ -69,7 +74,7 @@ class Detection:
     rest: np.ndarray | None = None
     #: (P,) int8 outcome of the placement tests: -1 not tested (score-first: the score
     #: rejected the pair; tests-first tests every pair), 0 placed, else the first test
-    #: failed (1 clearance, 2 contact, 3 interior, 4 collision, ...: :mod:`.clearance`; the
+    #: failed (1 clearance, 2 contact, 3 interior, 4 collision, ...: :mod:`~interaction_tensor.placement.checks`; the
     #: collision test runs on ranked pairs only)
     placement: np.ndarray | None = None
     #: the collision test of ranked pairs (:class:`~.ranking.CollisionCheck`), None until built

@@ -14,17 +14,36 @@ from dataclasses import dataclass
 import numpy as np
 
 from interaction_tensor.descriptor.tensor import InteractionTensor
-from interaction_tensor.detection.places import Prediction, heat_map, suppression_radius, top_k
+from interaction_tensor.detection.places import (
+    Prediction,
+    heat_map,
+    suppression_radius,
+    top_k,
+)
 from interaction_tensor.detection.ranking import collision_check
 from interaction_tensor.detection.result import Detection, accepted_indices
 from interaction_tensor.engine.backends import cache_budget, cache_pays, open_backend
-from interaction_tensor.engine.scoring import (EXIT_AT_REJECTION, EXIT_NEVER, PairScores,
-                                               ScoreJob, score_pairs)
+from interaction_tensor.engine.scoring import (
+    EXIT_AT_REJECTION,
+    EXIT_NEVER,
+    PairScores,
+    ScoreJob,
+    score_pairs,
+)
 from interaction_tensor.geometry.scene import Scene
-from interaction_tensor.placement.checks import (FAILS_CLEARANCE, FAILS_CONTACT, FAILS_FEET,
-                                                 FAILS_GROUND, FAILS_INTERIOR, FAILS_MOUNT,
-                                                 FAILS_STRADDLE, FAILS_THROUGH, PLACED,
-                                                 UNTESTED, check_placements)
+from interaction_tensor.placement.checks import (
+    FAILS_CLEARANCE,
+    FAILS_CONTACT,
+    FAILS_FEET,
+    FAILS_GROUND,
+    FAILS_INTERIOR,
+    FAILS_MOUNT,
+    FAILS_STRADDLE,
+    FAILS_THROUGH,
+    PLACED,
+    UNTESTED,
+    check_placements,
+)
 from interaction_tensor.settings import DetectSettings
 
 

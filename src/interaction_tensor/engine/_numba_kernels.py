@@ -29,7 +29,6 @@ from interaction_tensor.engine.cache_layout import PAGE, PAGE_BITS
 from interaction_tensor.geometry.grid import FAR_BLOCK, FAR_CELLS
 
 
-
 @njit(cache=True, inline="always")
 def _gap(f, c, d):
     """Distance, in cells, from coordinate ``f`` (cell units, in cell ``c``) to cell c + d."""
@@ -836,6 +835,48 @@ def _build_tree(lx, ly, lz, h, cand, m, pts, tol, leaf_size, max_depth, nchild, 
     return nodes, entries
 
 
+@njit(cache=True)
+def _build_root(t, blocks, bo, hb, bdims, lattice, tol, slack, leaf_size, max_depth, pts, starts,
+                seed, occ, cb, origin, cell, dims, noff, eoff, nchild, nstart, nlen, ent,
+                counts):
+    """Root block ``blocks[t]`` of :func:`build_roots`: its candidates gathered and filtered,
+    its octree built (a function of its own: the parallel loop stays a plain call, which
+    Numba compiles in a fraction of the time of the whole body)."""
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    nx, ny, nz = dims[0], dims[1], dims[2]
+    b = blocks[t]
+    bk = b % bdims[2]
+    bj = (b // bdims[2]) % bdims[1]
+    bi = b // (bdims[2] * bdims[1])
+    lx = bo[0] + bi * hb
+    ly = bo[1] + bj * hb
+    lz = bo[2] + bk * hb
+    cx = lx + 0.5 * hb
+    cy = ly + 0.5 * hb
+    cz = lz + 0.5 * hb
+    nc = _nearest_call(cx, cy, cz, pts, starts, seed, occ, ox, oy, oz, cell, nx, ny, nz)
+    dx = pts[nc, 0] - cx
+    dy = pts[nc, 1] - cy
+    dz = pts[nc, 2] - cz
+    r = math.sqrt(dx * dx + dy * dy + dz * dz) + math.sqrt(3.0) * (hb + 2e-6 * hb)
+    # gather with the centre's nearest sample as the only separator, then filter with
+    # the gathered samples nearest to a lattice over the block (exact: a point of the
+    # block has its nearest sample among those the centre's does not dominate)
+    sep = np.full(8, nc, np.int64)
+    buf, m = _gather(lx, ly, lz, hb, r + slack, sep, 1, tol, pts, starts, occ, cb, ox, oy,
+                     oz, cell, nx, ny, nz)
+    if m > 1:
+        sep = np.empty((lattice + 1) ** 3, np.int64)
+        _lattice_nearest(buf, m, lx, ly, lz, hb, lattice, pts, sep)
+        m = _filter(buf, m, lx, ly, lz, hb, pts, sep, lattice, tol)
+    a0, a1 = noff[t], noff[t + 1]
+    e0, e1 = eoff[t], eoff[t + 1]
+    nn, ne = _build_tree(lx, ly, lz, hb, buf, m, pts, tol, leaf_size, max_depth,
+                         nchild[a0:a1], nstart[a0:a1], nlen[a0:a1], ent[e0:e1])
+    counts[t, 0] = nn
+    counts[t, 1] = ne
+
+
 @njit(cache=True, parallel=True)
 def build_roots(blocks, bo, hb, bdims, lattice, tol, slack, leaf_size, max_depth, pts, starts,
                 seed, occ, cb, origin, cell, dims, noff, eoff, nchild, nstart, nlen, ent,
@@ -849,40 +890,10 @@ def build_roots(blocks, bo, hb, bdims, lattice, tol, slack, leaf_size, max_depth
     Tree t goes to nodes ``noff[t]:noff[t + 1]`` and entries ``eoff[t]:eoff[t + 1]``;
     ``counts[t]`` = (nodes, entries) it needs (more than its room: build it again with more).
     """
-    ox, oy, oz = origin[0], origin[1], origin[2]
-    nx, ny, nz = dims[0], dims[1], dims[2]
     for t in prange(blocks.shape[0]):
-        b = blocks[t]
-        bk = b % bdims[2]
-        bj = (b // bdims[2]) % bdims[1]
-        bi = b // (bdims[2] * bdims[1])
-        lx = bo[0] + bi * hb
-        ly = bo[1] + bj * hb
-        lz = bo[2] + bk * hb
-        cx = lx + 0.5 * hb
-        cy = ly + 0.5 * hb
-        cz = lz + 0.5 * hb
-        nc = nearest(cx, cy, cz, pts, starts, seed, occ, ox, oy, oz, cell, nx, ny, nz)
-        dx = pts[nc, 0] - cx
-        dy = pts[nc, 1] - cy
-        dz = pts[nc, 2] - cz
-        r = math.sqrt(dx * dx + dy * dy + dz * dz) + math.sqrt(3.0) * (hb + 2e-6 * hb)
-        # gather with the centre's nearest sample as the only separator, then filter with
-        # the gathered samples nearest to a lattice over the block (exact: a point of the
-        # block has its nearest sample among those the centre's does not dominate)
-        sep = np.full(8, nc, np.int64)
-        buf, m = _gather(lx, ly, lz, hb, r + slack, sep, 1, tol, pts, starts, occ, cb, ox, oy,
-                         oz, cell, nx, ny, nz)
-        if m > 1:
-            sep = np.empty((lattice + 1) ** 3, np.int64)
-            _lattice_nearest(buf, m, lx, ly, lz, hb, lattice, pts, sep)
-            m = _filter(buf, m, lx, ly, lz, hb, pts, sep, lattice, tol)
-        a0, a1 = noff[t], noff[t + 1]
-        e0, e1 = eoff[t], eoff[t + 1]
-        nn, ne = _build_tree(lx, ly, lz, hb, buf, m, pts, tol, leaf_size, max_depth,
-                             nchild[a0:a1], nstart[a0:a1], nlen[a0:a1], ent[e0:e1])
-        counts[t, 0] = nn
-        counts[t, 1] = ne
+        _build_root(t, blocks, bo, hb, bdims, lattice, tol, slack, leaf_size, max_depth, pts,
+                    starts, seed, occ, cb, origin, cell, dims, noff, eoff, nchild, nstart, nlen,
+                    ent, counts)
 
 
 @njit(cache=True)
@@ -946,25 +957,3 @@ def nearest_many(q, pts, starts, seed, occ, origin, cell, dims, out):
                          origin[2], cell, dims[0], dims[1], dims[2])
 
 
-@njit(cache=True, parallel=True, fastmath=False)
-def winding_numbers(points, tri):
-    """Generalised winding numbers of ``points`` (P, 3) for triangles ``tri`` (F, 3, 3): the
-    same formula as :func:`interaction_tensor.geometry.sampling.winding_numbers_reference`."""
-    out = np.zeros(points.shape[0])
-    for i in prange(points.shape[0]):
-        px, py, pz = points[i, 0], points[i, 1], points[i, 2]
-        total = 0.0
-        for f in range(tri.shape[0]):
-            ax, ay, az = tri[f, 0, 0] - px, tri[f, 0, 1] - py, tri[f, 0, 2] - pz
-            bx, by, bz = tri[f, 1, 0] - px, tri[f, 1, 1] - py, tri[f, 1, 2] - pz
-            cx, cy, cz = tri[f, 2, 0] - px, tri[f, 2, 1] - py, tri[f, 2, 2] - pz
-            la = math.sqrt(ax * ax + ay * ay + az * az)
-            lb = math.sqrt(bx * bx + by * by + bz * bz)
-            lc = math.sqrt(cx * cx + cy * cy + cz * cz)
-            det = (ax * (by * cz - bz * cy) + ay * (bz * cx - bx * cz)
-                   + az * (bx * cy - by * cx))
-            den = (la * lb * lc + (ax * bx + ay * by + az * bz) * lc
-                   + (bx * cx + by * cy + bz * cz) * la + (cx * ax + cy * ay + cz * az) * lb)
-            total += math.atan2(det, den)
-        out[i] = total / (2.0 * math.pi)
-    return out

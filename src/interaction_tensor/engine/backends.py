@@ -22,6 +22,12 @@ import numpy as np
 from interaction_tensor.engine import numba_backend
 from interaction_tensor.engine.numba_backend import CACHE_BYTES, score_jobs
 from interaction_tensor.engine.scoring import PairScores, ScoreJob, score_pairs
+from interaction_tensor.engine.torch_backend import (
+    TorchIndex,
+    import_torch,
+    resolve_device,
+    score_pairs_torch,
+)
 from interaction_tensor.errors import SettingsError
 
 #: Auto neighbour cache: used when at least this fraction of the scene's points is tested
@@ -45,7 +51,6 @@ def resolve_backend(name: str) -> str:
     if name == "numba" and not numba_backend.available():
         raise SettingsError("backend 'numba' needs Numba: pip install numba")
     if name == "torch":
-        from interaction_tensor.engine.torch_backend import import_torch
 
         import_torch()
     if name not in BACKENDS:
@@ -147,7 +152,6 @@ class TorchBackend(Backend):
     name = "torch"
 
     def __init__(self, scene, device=None):
-        from interaction_tensor.engine.torch_backend import TorchIndex, resolve_device
 
         super().__init__(scene, device)
         _ = scene.tree
@@ -156,7 +160,6 @@ class TorchBackend(Backend):
         self.device = str(self.index.device)
 
     def _score_slice(self, job, sl):
-        from interaction_tensor.engine.torch_backend import score_pairs_torch
 
         s = self.scene
         return score_pairs_torch(s.points[job.points[sl]], job.orient[sl], job.table,

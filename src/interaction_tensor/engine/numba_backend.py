@@ -15,12 +15,10 @@ Numba is imported lazily; :func:`available` says whether it can be used.
 
 from __future__ import annotations
 
-
 import numpy as np
 
 from interaction_tensor.engine.cache_layout import PAGE, PAGE_BITS
-from interaction_tensor.engine.scoring import ScoreJob
-from interaction_tensor.engine.scoring import paper_limits
+from interaction_tensor.engine.scoring import ScoreJob, paper_limits
 from interaction_tensor.geometry.grid import FAR_BLOCK, Grid
 
 _KERNELS = None

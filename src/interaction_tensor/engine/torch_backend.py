@@ -21,8 +21,14 @@ from __future__ import annotations
 
 import numpy as np
 
+from interaction_tensor.engine.scoring import (
+    ArrayOps,
+    PairScores,
+    onto_disks,
+    paper_limits,
+    vector_terms,
+)
 from interaction_tensor.errors import SettingsError
-from interaction_tensor.engine.scoring import ArrayOps, PairScores, onto_disks, paper_limits, vector_terms
 
 #: Largest candidate-distance matrix computed at once (entries), to bound device memory.
 MAX_BLOCK = 1 << 25
@@ -88,11 +94,10 @@ class TorchIndex:
         a query whose nearest point the first level cannot prove (farther than its room to
         the grown tile's outside) is asked again at the next, on the device; only what the
         last level cannot prove goes to SciPy's cKDTree. Default (None): 3 levels each twice
-        the one before with the Triton kernel (an H200, kitchen5, placing-bowl, 30 %,
-        2026-11-26: 12.5 s, against 16.7 s for 2 levels x4 and 32.5 s for 1, which sent 34M
-        queries to the tree), 1 level with cdist (3 %: a second level took 11.0 s against
-        9.4 s for one; it sent 87k instead of 3.4M queries to the tree, but its large tiles
-        cost more)
+        the one before with the Triton kernel (on an H200, kitchen5, placing-bowl, 30 %:
+        12.5 s, against 16.7 s for 2 levels x4 and 32.5 s for 1, which sent 34M queries to
+        the tree), 1 level with cdist (3 %: a second level took 11.0 s against 9.4 s for one;
+        it sent 87k instead of 3.4M queries to the tree, but its large tiles cost more)
     coarsening : see ``levels``; None: 2 with Triton, 4 with cdist
     """
 

@@ -11,8 +11,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from interaction_tensor.examples.procedural import (
+    Part,
+    bookcase,
+    bowl,
+    box_part,
+    parts_mesh,
+    room_shell,
+    table,
+)
 from interaction_tensor.geometry.core import Geometry
-from interaction_tensor.examples.procedural import Part, bookcase, bowl, box_part, parts_mesh, room_shell, table
 
 TRAIN_TABLE_HEIGHT = 0.75
 #: Sample spacing (m) of the demo, coarser than the library's 1 cm default so that the whole

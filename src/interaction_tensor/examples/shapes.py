@@ -3,7 +3,7 @@
 Every function returns a :class:`~interaction_tensor.geometry.core.Geometry` mesh built from closed
 primitives (boxes, cylinders, spheres and solids of revolution from ``trimesh.creation``).
 Pieces may overlap: each piece is watertight, so the union is a closed solid for the judge's
-voxel fill (``evaluation.judge``), although the concatenated mesh is not a manifold union.
+voxel fill (``itensor_paper.judge``), although the concatenated mesh is not a manifold union.
 
 Query objects rest on ``z = 0`` (hanging ones hang from ``z = 0``, see each docstring) and
 scene-objects stand on ``z = 0``. Sizes are realistic: a mug 9.5 cm tall, a stool seat at
@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from interaction_tensor.examples.procedural import parts_mesh, table
 from interaction_tensor.geometry.core import Geometry
 
 
@@ -173,7 +174,6 @@ def riding_human() -> Geometry:
 # ------------------------------------------------------------------ scene-objects
 def table_mesh(size_xy=(1.0, 0.8), height: float = 0.75) -> Geometry:
     """A table with its top at ``height`` centred at the origin."""
-    from interaction_tensor.examples.procedural import parts_mesh, table
 
     g = parts_mesh(table("table", (0.0, 0.0), size_xy, height))
     g.source = f"procedural table (top at {height} m)"

@@ -1,6 +1,6 @@
 """Exact triangle-mesh collision on python-fcl (the Flexible Collision Library): detection's
 collision test of the ranked placements (:mod:`.detect`) and the judge's penetration test
-(:mod:`.evaluation.judge`).
+(the paper's judge, ``itensor_paper.judge``).
 
 The scene is one BVH of its triangles, built once; a query object is one or more BVHs of its
 own triangles (its parts), moved by a 4x4 pose. Triangles are tested exactly, so a 3 mm wire

@@ -13,7 +13,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-
 #: Block edge, in grid cells, of the grid's block occupancy (:attr:`Grid.occ`; also the
 #: cache builder's, :data:`CACHE_OCC_CELLS`). Compiled into the Numba kernels.
 FAR_BLOCK = 4

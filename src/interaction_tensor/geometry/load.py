@@ -14,9 +14,15 @@ from pathlib import Path
 import numpy as np
 
 from interaction_tensor.errors import InputError
-from interaction_tensor.geometry.core import (MAX_SCENE_EXTENT, SUFFIXES,
-                                              Geometry, check_scale, from_object,
-                                              to_library_frame, up_rotation)
+from interaction_tensor.geometry.core import (
+    MAX_SCENE_EXTENT,
+    SUFFIXES,
+    Geometry,
+    check_scale,
+    from_object,
+    to_library_frame,
+    up_rotation,
+)
 from interaction_tensor.geometry.readers import READERS
 
 

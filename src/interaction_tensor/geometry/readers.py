@@ -37,10 +37,10 @@ from pathlib import Path
 import numpy as np
 
 from interaction_tensor.errors import InputError
+from interaction_tensor.geometry.core import Geometry, from_object
 
 
 def _geometry(vertices, faces=None, normals=None, colors=None):
-    from interaction_tensor.geometry.core import Geometry
 
     return Geometry(np.asarray(vertices, np.float64),
                     None if faces is None or len(faces) == 0 else np.asarray(faces, np.int64),
@@ -274,7 +274,6 @@ def _trimesh_geometry(path: Path):
     except Exception as exc:  # trimesh's parsers raise every kind of error
         raise InputError(path, f"cannot parse as {path.suffix[1:].upper()}: {exc}") from None
     if isinstance(loaded, (trimesh.Scene, trimesh.Trimesh, trimesh.PointCloud)):
-        from interaction_tensor.geometry.core import from_object    # the one trimesh -> Geometry conversion
 
         return from_object(loaded, str(path))
     raise InputError(path, f"unsupported content {type(loaded).__name__}")

@@ -139,14 +139,12 @@ def uniform_keypoints(count: int, n: int, seed) -> np.ndarray:
 def winding_numbers(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     """Generalised winding number of each point with respect to a triangle mesh: the Numba
     kernel when Numba imports, else :func:`winding_numbers_reference` (same formula)."""
-    from interaction_tensor.engine import numba_backend as kernels
-
-    if not kernels.available():
+    try:
+        from interaction_tensor.geometry._winding import winding_numbers as kernel
+    except ImportError:                                     # no Numba: the NumPy reference
         return winding_numbers_reference(points, vertices, faces)
-    from interaction_tensor.engine import _numba_kernels
-
     tri = np.ascontiguousarray(np.asarray(vertices, np.float64)[np.asarray(faces, np.int64)])
-    return _numba_kernels.winding_numbers(np.ascontiguousarray(points, dtype=np.float64), tri)
+    return kernel(np.ascontiguousarray(points, dtype=np.float64), tri)
 
 
 def winding_numbers_reference(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray,

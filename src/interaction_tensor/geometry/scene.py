@@ -9,9 +9,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
+from interaction_tensor.errors import InputError
+from interaction_tensor.geometry.collision import MeshCollider
 from interaction_tensor.geometry.core import Geometry, validate_geometry
-from interaction_tensor.geometry.sampling import estimate_normals, mean_spacing, mesh_area, sample_mesh
-
+from interaction_tensor.geometry.grid import build_grid, grid_cells
+from interaction_tensor.geometry.sampling import (
+    estimate_normals,
+    mean_spacing,
+    mesh_area,
+    sample_mesh,
+)
 
 #: Grid cell edge of the Numba nearest-neighbour search, in scene spacings (fastest of
 #: 1, 2, 3, 4 on the demo room; see benchmarks/).
@@ -70,7 +77,6 @@ class Scene:
     def grid(self):
         """Uniform grid over ``points`` for the Numba kernels (built on first use)."""
         if self._grid is None:
-            from interaction_tensor.geometry.grid import build_grid
 
             self._grid = build_grid(self.points, self.normals, GRID_CELL_FACTOR * self.spacing)
         return self._grid
@@ -79,7 +85,6 @@ class Scene:
         """The scene's triangles as a :class:`~.collision.MeshCollider` (python-fcl; built on
         first use), or None for a scene without a mesh."""
         if self._collider is None and self.mesh is not None:
-            from interaction_tensor.geometry.collision import MeshCollider
 
             self._collider = MeshCollider(*self.mesh)
         return self._collider
@@ -231,7 +236,6 @@ def available_memory() -> int | None:
 def check_memory(n_points: int, source, available: int | None = None) -> None:
     """Refuse, before any work, a scene of ``n_points`` that would need more memory than is
     available (:data:`BYTES_PER_POINT` each): one clear line instead of an OOM kill."""
-    from interaction_tensor.errors import InputError
 
     available = available_memory() if available is None else available
     need = int(n_points) * BYTES_PER_POINT
@@ -272,7 +276,6 @@ def spatially_sorted(points: np.ndarray, normals: np.ndarray, spacing: float):
     """``points`` and ``normals`` reordered cell by cell as :meth:`Scene.grid` sorts them, so
     that the grid shares the scene's arrays instead of copying them (48 bytes a point) and
     neighbouring points lie near each other in memory."""
-    from interaction_tensor.geometry.grid import grid_cells
 
     lin, *_ = grid_cells(points, GRID_CELL_FACTOR * spacing)
     order = np.argsort(lin, kind="stable")

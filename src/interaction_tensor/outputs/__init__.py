@@ -10,7 +10,7 @@ eye-dome lighting), so it needs no display, no OpenGL and no GPU: the same code 
 laptop, a headless server and CI. Pillow writes the PNG and draws the text.
 """
 
-from interaction_tensor.outputs.render import render_outdir, render_tensor
 from interaction_tensor.outputs.html import write_viewer
+from interaction_tensor.outputs.render import render_outdir, render_tensor
 
 __all__ = ["render_outdir", "render_tensor", "write_viewer"]

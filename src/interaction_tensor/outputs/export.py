@@ -6,7 +6,13 @@ from pathlib import Path
 
 import numpy as np
 
-from interaction_tensor.geometry.files import (Gathered, atomic_path, write_json, write_mesh, write_ply_points)
+from interaction_tensor.geometry.files import (
+    Gathered,
+    atomic_path,
+    write_json,
+    write_mesh,
+    write_ply_points,
+)
 
 
 def colormap(values: np.ndarray, vmin: float = 0.0, vmax: float = 1.0) -> np.ndarray:

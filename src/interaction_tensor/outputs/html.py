@@ -15,6 +15,9 @@ from pathlib import Path
 
 import numpy as np
 
+from interaction_tensor.descriptor.tensor import InteractionTensor
+from interaction_tensor.geometry.files import atomic_path
+from interaction_tensor.geometry.sampling import mean_spacing
 from interaction_tensor.outputs.export import colormap
 from interaction_tensor.outputs.render import load_outdir
 
@@ -81,8 +84,6 @@ def _example(tensor, max_bisector: int = 20_000, seed: int = 0) -> dict:
 
 def build_data(outdir, max_points: int = MAX_POINTS, seed: int = 0) -> dict:
     """Everything the page shows, as a JSON-ready dict (see :func:`write_viewer`)."""
-    from interaction_tensor.descriptor.tensor import InteractionTensor
-    from interaction_tensor.geometry.sampling import mean_spacing
 
     od = load_outdir(outdir)
     pts, score = od.points, od.score
@@ -198,7 +199,6 @@ def write_viewer(outdir, max_points: int = MAX_POINTS, out_html=None, seed: int 
     ``predictions.json`` can be found, the training example with the bisector points and the
     keypoints' provenance vectors coloured by weight.
     """
-    from interaction_tensor.geometry.files import atomic_path
 
     outdir = Path(outdir)
     data = build_data(outdir, max_points, seed)

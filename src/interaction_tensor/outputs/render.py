@@ -12,8 +12,18 @@ from pathlib import Path
 
 import numpy as np
 
+from interaction_tensor.descriptor.tensor import InteractionTensor
 from interaction_tensor.errors import InputError
+from interaction_tensor.geometry.core import Geometry
 from interaction_tensor.geometry.files import atomic_path
+from interaction_tensor.geometry.load import load_geometry
+from interaction_tensor.geometry.readers import read_ply
+from interaction_tensor.geometry.sampling import (
+    estimate_normals,
+    mean_spacing,
+    mesh_area,
+    sample_mesh,
+)
 from interaction_tensor.outputs.export import colormap
 from interaction_tensor.outputs.raster import Canvas, frame_points
 
@@ -24,7 +34,6 @@ PANEL = (640, 480)
 # --------------------------------------------------------------------------- reading
 def read_ply_vertices(path) -> dict:
     """Vertex properties of a PLY file as ``name -> (N,) array`` (the library's PLY reader)."""
-    from interaction_tensor.geometry.readers import read_ply
 
     path = Path(path)
     if not path.is_file():
@@ -59,7 +68,6 @@ class Outdir:
 
 def load_outdir(outdir, top_k: int | None = None) -> Outdir:
     """Read ``predictions.json``, ``heatmap.ply`` and ``top/`` of a detection directory."""
-    from interaction_tensor.geometry.load import load_geometry
 
     outdir = Path(outdir)
     if not outdir.is_dir():
@@ -97,7 +105,6 @@ def load_outdir(outdir, top_k: int | None = None) -> Outdir:
 def _surface_samples(geometry, spacing: float, seed: int = 0):
     """Points (N, 3) and normals (N, 3) covering a mesh about every ``spacing`` m (at most
     150k), or a cloud's own points with PCA normals."""
-    from interaction_tensor.geometry.sampling import estimate_normals, mesh_area, sample_mesh
 
     if geometry.is_mesh:
         n = int(np.clip(mesh_area(geometry) / spacing ** 2, 500, 150_000))
@@ -108,7 +115,6 @@ def _surface_samples(geometry, spacing: float, seed: int = 0):
 
 
 def _spacing(points: np.ndarray) -> float:
-    from interaction_tensor.geometry.sampling import mean_spacing
 
     return max(mean_spacing(points, sample=5000), 1e-4)
 
@@ -236,7 +242,6 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
     out_png = Path(out_png) if out_png else od.path / "render.png"
     pts, score = od.points, od.score
     colors = colormap(score, vmin=od.threshold, vmax=1.0)
-    from interaction_tensor.geometry.sampling import estimate_normals
 
     spacing = _spacing(pts)
     size = 2.2 * spacing
@@ -324,9 +329,6 @@ def render_tensor(descriptor, out_png, supersample: int = 2) -> Path:
     each keypoint to the scene-object, coloured by weight) show through.
     ``descriptor``: an InteractionTensor or the path of its ``.npz``.
     """
-    from interaction_tensor.descriptor.tensor import InteractionTensor
-    from interaction_tensor.geometry.core import Geometry
-    from interaction_tensor.geometry.sampling import estimate_normals
 
     tensor = descriptor if isinstance(descriptor, InteractionTensor) \
         else InteractionTensor.load(descriptor)

@@ -40,7 +40,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from interaction_tensor.engine.numba_backend import nearest_indices
 from interaction_tensor.engine.scoring import rotation_z
+from interaction_tensor.geometry.core import Geometry
+from interaction_tensor.geometry.sampling import sample_mesh
 
 #: How much nearer (m) than in the example the scene may come to a clearance point: a little
 #: closer than the example, never through the object (the clearance test).
@@ -54,7 +57,7 @@ CHUNK_QUERIES = 2_000_000
 #: (the score rejected it), kept, or the first test it failed, in the order they run.
 UNTESTED, PLACED, FAILS_CLEARANCE, FAILS_CONTACT, FAILS_INTERIOR = -1, 0, 1, 2, 3
 #: A placement that passed these tests but whose triangles cross the scene's: detection's
-#: exact collision test of the placements it ranks (:class:`..detect.CollisionCheck`).
+#: exact collision test of the placements it ranks (:class:`~interaction_tensor.detection.ranking.CollisionCheck`).
 FAILS_COLLISION = 4
 #: A placement whose query object reaches more than the descriptor's ``below_ground`` below
 #: the scene's ground (:func:`below_ground`).
@@ -85,7 +88,7 @@ FEET_ABOVE_GROUND = 0.6
 GROUND_RADIUS = 1.5
 #: A placement whose posed through-section (the opening of a hook or a strap's loop, where
 #: the example's rail went through) no scene sample crosses (:func:`through_crossed`;
-#: hanging). Detection's exact test (:class:`..detect.CollisionCheck`) asks the scene's
+#: hanging). Detection's exact test (:class:`~interaction_tensor.detection.ranking.CollisionCheck`) asks the scene's
 #: triangles the same of the pairs it ranks; this one asks every pair, so that the exact
 #: tests are spent on pairs with something through the hook.
 FAILS_THROUGH = 9
@@ -108,7 +111,7 @@ THROUGH_CHUNK = 4_000
 #: or a person's seat region (:func:`seat_region`).
 CONTACT_MODES = ("off", "main", "all", "seat")
 #: A person's seat region (the ``seat`` contact mode; the judge's main contact of a person,
-#: ``evaluation.judge.Judge._main_contact``): the query's surface within
+#: ``itensor_paper.judge.Judge._main_contact``): the query's surface within
 #: ``SEAT_REGION_HEIGHT`` (m) above its lowest point among the samples within
 #: ``SEAT_RADIUS`` (m) of the reference point and not lower than it by more than that
 #: height: buttocks, crotch and thighs, whichever a seat of another shape touches.
@@ -200,7 +203,6 @@ def nearest_samples(queries: np.ndarray, scene, grid=None):
     if grid is None:
         d, i = scene.tree.query(q, workers=-1)
         return d, np.asarray(i, np.int64)
-    from interaction_tensor.engine.numba_backend import nearest_indices
 
     i = nearest_indices(grid, q)
     return np.linalg.norm(scene.points[i] - q, axis=1), i
@@ -268,8 +270,6 @@ def seat_region(tensor) -> np.ndarray:
     cached = getattr(tensor, "_seat_region", None)
     if cached is not None:
         return cached
-    from interaction_tensor.geometry.core import Geometry
-    from interaction_tensor.geometry.sampling import sample_mesh
 
     region = np.zeros((0, 3))
     if len(tensor.query_faces):

@@ -19,7 +19,12 @@ import time
 import numpy as np
 
 from interaction_tensor.descriptor.bisector import bisector_points, trim_to_sphere
-from itensor_paper.baselines.common import BaselineResult, candidate_poses, local_points, voxel_down
+from itensor_paper.baselines.common import (
+    BaselineResult,
+    candidate_poses,
+    local_points,
+    voxel_down,
+)
 from itensor_paper.baselines.icp import icp
 from itensor_paper.baselines.naive import query_samples
 

@@ -19,14 +19,14 @@ import time
 import numpy as np
 from scipy.spatial import cKDTree
 
+from interaction_tensor.geometry.core import Geometry
+from interaction_tensor.geometry.sampling import sample_mesh
 from itensor_paper.baselines.common import BaselineResult, candidate_poses, local_points
 from itensor_paper.baselines.icp import icp
 
 
 def query_samples(tensor, count: int = 800, seed: int = 0) -> np.ndarray:
     """(count, 3) area-uniform samples of the tensor's query object (training frame)."""
-    from interaction_tensor.geometry.core import Geometry
-    from interaction_tensor.geometry.sampling import sample_mesh
 
     if tensor.query_is_mesh:
         return sample_mesh(Geometry(tensor.query_vertices, tensor.query_faces), count, seed)[0]

@@ -38,9 +38,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from interaction_tensor.geometry.core import Geometry
 from interaction_tensor.examples import procedural, shapes
 from interaction_tensor.examples.shapes import ball, box, polyline, revolve, rod
+from interaction_tensor.geometry.core import Geometry
 
 KINDS = ("seat", "astride", "hang", "place", "fill")
 INF = float("inf")

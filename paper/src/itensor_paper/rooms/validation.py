@@ -18,10 +18,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from interaction_tensor.geometry.core import Geometry
-from itensor_paper.rooms import furniture as F
 from interaction_tensor.examples.procedural import room_shell
 from interaction_tensor.examples.shapes import _geometry
+from interaction_tensor.geometry.core import Geometry
+from itensor_paper.rooms import furniture as F
 
 KINDS = F.KINDS
 
