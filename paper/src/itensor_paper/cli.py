@@ -9,6 +9,8 @@ when this package is installed and never imports it otherwise.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from interaction_tensor.cli.common import (
     _fraction,
     _spacing,
@@ -22,6 +24,7 @@ from interaction_tensor.errors import InputError
 from itensor_paper.merge import merge, rejudge
 from itensor_paper.report import judge_markdown, table_markdown
 from itensor_paper.runner import METHODS, EvalSettings, evaluate
+from itensor_paper import panel
 from itensor_paper.summary import write_summary
 from itensor_paper.tuning import TuneSettings, tune, write
 
@@ -93,6 +96,31 @@ def cmd_evaluate_rejudge(args) -> int:
         print(table_markdown(res.table, tuple(res.settings.get("methods") or ())))
         if res.judge_accuracy:
             print("\nThe judge on its labelled poses:\n" + judge_markdown(res.judge_accuracy))
+    return 0
+
+
+def cmd_panel_sheets(args) -> int:
+    import csv
+
+    with open(Path(args.run) / "judgements.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    held = sorted({r["scene"] for r in rows} - set(panel.DEVELOPMENT_SCENES))
+    dev = panel.select(rows, args.development, args.seed, scenes=panel.DEVELOPMENT_SCENES)
+    hold = panel.select(rows, args.per_affordance, args.seed + 1, scenes=held,
+                        first_id=len(dev) + 1)
+    poses = panel.shuffled_ids(dev + hold, args.seed + 2)
+    panel.draw(poses, args.scenes, objects_dir(args.objects), args.output)
+    if not args.quiet:
+        print(f"wrote {len(poses)} poses' rating sheets and key.csv into {args.output}")
+    return 0
+
+
+def cmd_panel_verdicts(args) -> int:
+    poses = panel.merge_answers(panel.load(args.key), *args.answers)
+    panel.save(poses, args.output)
+    if not args.quiet:
+        decided = sum(p.majority is not None for p in poses)
+        print(f"wrote {args.output}: {len(poses)} poses, {decided} with a majority")
     return 0
 
 
@@ -197,3 +225,29 @@ def register(sub) -> None:
                    help="the summary folder (replaced whole)")
     quiet_option(p)
     p.set_defaults(func=cmd_summary)
+
+    p = sub.add_parser("panel-sheets",
+                       help="draw rating sheets for a blind panel from an evaluation's judged "
+                            "poses (two views each, one colour, ids only) and their key")
+    p.add_argument("run", help="output directory of an evaluation (its judgements.csv)")
+    p.add_argument("-o", "--output", required=True, help="folder of the sheets and the key")
+    p.add_argument("--scenes", required=True, help="directory of the run's scene files")
+    p.add_argument("--objects", default=None, help="directory of real query objects")
+    p.add_argument("--per-affordance", type=_positive_int, default=64,
+                   help="held-out poses per affordance (from the scenes the judge is not "
+                        "fixed on)")
+    p.add_argument("--development", type=_positive_int, default=40,
+                   help="poses per affordance from the development scenes")
+    seed_option(p)
+    quiet_option(p)
+    p.set_defaults(func=cmd_panel_sheets)
+
+    p = sub.add_parser("panel-verdicts",
+                       help="add raters' answers (CSV files of id,yes|no) to a panel's key: "
+                            "the labelled data the judge is checked against")
+    p.add_argument("key", help="the panel's key.csv (or the labelled data to add answers to)")
+    p.add_argument("answers", nargs="+", help="one CSV of id,answer per rater")
+    p.add_argument("-o", "--output", default=str(panel.DATA_FILE),
+                   help="where to write the poses and verdicts")
+    quiet_option(p)
+    p.set_defaults(func=cmd_panel_verdicts)

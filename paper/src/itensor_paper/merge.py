@@ -26,6 +26,7 @@ from interaction_tensor.geometry.files import atomic_dir
 from interaction_tensor.geometry.load import load_geometry
 from itensor_paper import labelled
 from itensor_paper.judge import Judge, JudgeScene, JudgeSettings
+from itensor_paper.panel import add_panel_agreement
 from itensor_paper.pictures import run_sheet
 from itensor_paper.report import write_all
 from itensor_paper.runner import METHODS, EvalResult, metrics
@@ -35,10 +36,9 @@ from itensor_paper.runner import METHODS, EvalResult, metrics
 _PER_PART = {"scenes", "total_seconds", "judge_check", "merged_from", "rejudged_from"}
 
 _INT = {"rank", "candidates", "pairs", "accepted", "valid_n", "valid_right", "invalid_n",
-        "invalid_right"}
+        "invalid_right", "panel_n", "panel_agree"}
 _FLOAT = {"score", "x", "y", "z", "contact", "seconds", "judge_seconds", "valid_accuracy",
-          "mean_comparisons_per_decision",
-          "invalid_accuracy"}
+          "mean_comparisons_per_decision", "invalid_accuracy", "panel_agreement"}
 _BOOL = {"valid", "any_accepted"}
 
 
@@ -262,9 +262,9 @@ def rejudge(directory, out_dir, scenes_dir, objects_dir=None, affordances=None,
     methods = tuple(m for m in METHODS if m in (st.get("methods") or METHODS))
     res.table = metrics(res.judgements, methods, res.runs)
     if judge_check and objects_dir:
-
         res.judge_accuracy = labelled.judge_accuracy(labelled.load(), objects_dir,
                                                      Path(objects_dir).parent)[0]
+        add_panel_agreement(res.judge_accuracy, scenes_dir, objects_dir, log)
     res.settings["rejudged_from"] = str(d)
     method = "iT-weighted" if "iT-weighted" in methods else methods[0]
     with atomic_dir(out_dir, "run.json") as tmp:

@@ -87,13 +87,17 @@ def scenes_markdown(rows: list[dict]) -> str:
 
 
 def judge_markdown(rows: list[dict]) -> str:
-    """The judge's accuracy on the labelled set, per affordance and class."""
-    lines = ["| affordance | valid poses judged valid | invalid poses judged invalid |",
-             "|---|---:|---:|"]
+    """The judge's accuracy on the labelled set, per affordance and class, and its agreement
+    with the blind panel's majority on the held-out poses."""
+    lines = ["| affordance | valid poses judged valid | invalid poses judged invalid | "
+             "agreeing with the panel (held-out poses) |",
+             "|---|---:|---:|---:|"]
     for r in rows:
+        n = r.get("panel_n") or 0
+        panel = (f"{r['panel_agree']}/{n} ({_fmt(r['panel_agreement'])} %)" if n else "-")
         lines.append(f"| {r['affordance']} | {r['valid_right']}/{r['valid_n']} "
                      f"({_fmt(r['valid_accuracy'])} %) | {r['invalid_right']}/{r['invalid_n']} "
-                     f"({_fmt(r['invalid_accuracy'])} %) |")
+                     f"({_fmt(r['invalid_accuracy'])} %) | {panel} |")
     return "\n".join(lines)
 
 
@@ -140,7 +144,8 @@ def write_all(res, out: Path) -> None:
                "accepted_precision"])
     write_csv(out / "judge_accuracy.csv", res.judge_accuracy,
               ["affordance", "valid_n", "valid_right", "valid_accuracy", "invalid_n",
-               "invalid_right", "invalid_accuracy"])
+               "invalid_right", "invalid_accuracy", "panel_n", "panel_agree",
+               "panel_agreement"])
     scenes = scene_rows(res.runs)
     write_csv(out / "scenes_accepting.csv", scenes,
               ["affordance", "method", "scenes_accepting", "scenes"])

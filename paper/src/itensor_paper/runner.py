@@ -62,6 +62,7 @@ from itensor_paper.baselines.icp import resolve_backend
 from itensor_paper.baselines.naive import naive
 from itensor_paper.common import AFFORDANCES, METHODS, ranking_radius  # noqa: F401 (METHODS: re-exported)
 from itensor_paper.judge import Judge, JudgeScene, JudgeSettings
+from itensor_paper.panel import add_panel_agreement
 from itensor_paper.pictures import run_sheet
 from itensor_paper.report import write_all
 
@@ -168,9 +169,11 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
         poses = labelled.load()
         res.judge_accuracy, _ = labelled.judge_accuracy(poses, st.objects_dir,
                                                         Path(st.objects_dir).parent)
+        add_panel_agreement(res.judge_accuracy, files[0].parent, st.objects_dir, log)
         for r in res.judge_accuracy:
             log(f"judge on the labelled set, {r['affordance']}: valid {r['valid_right']}/"
-                f"{r['valid_n']}, invalid {r['invalid_right']}/{r['invalid_n']}")
+                f"{r['valid_n']}, invalid {r['invalid_right']}/{r['invalid_n']}; agreeing "
+                f"with the panel on {r['panel_agree']}/{r['panel_n']} held-out poses")
     else:
         log("judge accuracy on the labelled set not measured (it needs --objects)")
 

@@ -28,8 +28,7 @@ def pose(query: Geometry, spec: ExampleSpec, scene_object_file, seed: int) -> Po
 
 AFFORDANCE = Affordance(
     name="filling",
-    question="Could the container be filled here: standing under a tap's spout, over a sink "
-             "or basin where the water goes?",
+    question="Could this container be filled where it stands, from a tap in the scene?",
     normal=DOWN,
     anchor="bottom",
     examples=(ExampleSpec("filling-mug", "a mug in a sink under the tap", shapes.mug,

@@ -35,8 +35,7 @@ def pose(query: Geometry, spec: ExampleSpec, scene_object_file, seed: int) -> Po
 
 AFFORDANCE = Affordance(
     name="hanging",
-    question="Could the object hang here: its hook over something that passes through it, "
-             "the object hanging free below?",
+    question="Could this object be hung up here like this?",
     normal=UP,
     anchor="hook",
     examples=(ExampleSpec("hanging-hanger", "a coat hanger hooked on a clothes rail",

@@ -28,8 +28,7 @@ def pose(query: Geometry, spec: ExampleSpec, scene_object_file, seed: int) -> Po
 
 AFFORDANCE = Affordance(
     name="placing",
-    question="Could the object rest here on its own, level, fully supported, without "
-             "touching anything else?",
+    question="Could this object be put down here, to rest there on its own?",
     normal=UP,
     anchor="bottom",
     examples=(ExampleSpec("placing-bottle", "a bottle standing on a table", shapes.bottle,

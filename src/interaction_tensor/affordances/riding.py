@@ -70,8 +70,8 @@ def pose(query: Geometry, spec: ExampleSpec, scene_object_file, seed: int) -> Po
 
 AFFORDANCE = Affordance(
     name="riding",
-    question="Could a person sit astride here, as on a motorbike or a horse: one leg hanging "
-             "on each side, the seat between the thighs, within reach of the floor?",
+    question="Could a person sit astride here like this, as on a motorbike or a horse, one "
+             "leg on each side?",
     normal=UP,
     anchor="seat",
     examples=(ExampleSpec("riding-human", "a person riding a motorbike", shapes.riding_human,

@@ -62,8 +62,7 @@ def pose(query: Geometry, spec: ExampleSpec, scene_object_file, seed: int) -> Po
 
 AFFORDANCE = Affordance(
     name="sitting",
-    question="Could a person sit here, as on a chair or a stool: the thighs carried by the "
-             "seat, the feet on the floor or a foot rest, nothing passing through the body?",
+    question="Could a person sit here like this?",
     normal=UP,
     anchor="seat",
     examples=(ExampleSpec("sitting-human", "a person seated on a stool", shapes.seated_human,

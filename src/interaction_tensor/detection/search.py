@@ -22,7 +22,8 @@ from interaction_tensor.detection.places import (
 )
 from interaction_tensor.detection.ranking import collision_check
 from interaction_tensor.detection.result import Detection, accepted_indices
-from interaction_tensor.engine.backends import cache_budget, cache_pays, open_backend
+from interaction_tensor.engine.backends import (await_cache_kernels, cache_budget, cache_pays,
+                                                open_backend, prefetch_cache_kernels)
 from interaction_tensor.engine.scoring import (
     EXIT_AT_REJECTION,
     EXIT_NEVER,
@@ -272,7 +273,10 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     backend = open_backend(settings.backend, scene, settings.device)
     timings["index"] = time.perf_counter() - t1
     label = tensors[0].affordance if len(tensors) == 1 else f"{len(tensors)} affordances"
-    use_cache = cache_pays(engine.neighbour_cache, len(test_idx) / max(len(scene), 1))
+    use_cache = (backend.name == "numba"
+                 and cache_pays(engine.neighbour_cache, len(test_idx) / max(len(scene), 1)))
+    if use_cache:
+        prefetch_cache_kernels()
     cache = dict(cache=use_cache, cache_bytes=cache_budget(len(scene), engine.neighbour_cache),
                  keep_cache=engine.neighbour_cache is True)
     bar = None
@@ -292,6 +296,7 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
         subs = [ScoreJob(job.points[i], job.orient[i], job.table, job.threshold, job.vectors,
                          job.rho, job.early_exit) for job, i in zip(jobs, keep)]
         t2 = time.perf_counter()
+        await_cache_kernels()
         scores = backend.score(subs, n_o, engine.batch_size, bar, grouped=False, **cache)
         timings["scoring"] = time.perf_counter() - t2
         # back to every pair: those that failed a test were never scored; the accepted ones
@@ -306,6 +311,7 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
         # the scores of every pair (accepted ones in full), then the placement tests of the
         # pairs the score accepted
         t2 = time.perf_counter()
+        await_cache_kernels()
         scores = backend.score(jobs, n_o, engine.batch_size, bar, grouped=True, **cache)
         timings["scoring"] = time.perf_counter() - t2
         t3 = time.perf_counter()

@@ -17,18 +17,20 @@ otherwise (the reference): exact either way.
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 import numpy as np
 
 from interaction_tensor.engine import numba_backend
 from interaction_tensor.engine.numba_backend import CACHE_BYTES, score_jobs
-from interaction_tensor.engine.scoring import PairScores, ScoreJob, score_pairs
-from interaction_tensor.engine.torch_backend import (
-    TorchIndex,
-    import_torch,
-    resolve_device,
-    score_pairs_torch,
-)
+from interaction_tensor.engine.scoring import (EXIT_AT_REJECTION, PairScores, ScoreJob, make_table,
+                                               score_pairs)
+from interaction_tensor.engine.torch_backend import (TorchIndex, import_torch, resolve_device,
+                                                     score_pairs_torch)
 from interaction_tensor.errors import SettingsError
+from interaction_tensor.geometry.scene import Scene
 
 #: Auto neighbour cache: used when at least this fraction of the scene's points is tested
 #: (each block of space is then queried many times; below it building the cache costs more
@@ -227,3 +229,66 @@ def spatial_order(points: np.ndarray, pair_points: np.ndarray, n_o: int, grid) -
 def pairs_of(cands: np.ndarray, n_o: int) -> np.ndarray:
     """Pair indices of candidates ``cands`` (each candidate's ``n_o`` pairs, in order)."""
     return (cands[:, None] * n_o + np.arange(n_o)).ravel()
+
+
+# --------------------------------------------------------------------------- first use
+#: The process compiling the neighbour cache's kernels (:func:`prefetch_cache_kernels`).
+_PREFETCH: subprocess.Popen | None = None
+#: Set in that process, so that it does not start another.
+PREFETCHING = "ITENSOR_PREFETCHING"
+
+
+def cache_kernels_ready() -> bool:
+    """Whether Numba's on-disk cache holds the neighbour cache's kernels (compiled by an
+    earlier run on this machine)."""
+    from interaction_tensor.engine import _numba_kernels as nk
+
+    try:
+        return all(os.path.exists(k._cache._cache_file._index_path)
+                   for k in (nk.score_cached, nk.build_roots, nk.touched_roots))
+    except AttributeError:          # another Numba's cache layout: assume compiled
+        return True
+
+
+def prefetch_cache_kernels() -> None:
+    """On a machine where they were never compiled, compile the neighbour cache's kernels in a
+    process of their own, in parallel with the work that comes before the scoring (the
+    placement tests, which compile theirs): they take about half a minute on 2 cores, most of
+    a first run. The scoring waits for it (:func:`await_cache_kernels`) and loads them from
+    Numba's cache; the results are the same either way."""
+    global _PREFETCH
+    if _PREFETCH is not None or os.environ.get(PREFETCHING) or cache_kernels_ready():
+        return
+    env = dict(os.environ, **{PREFETCHING: "1"})
+    try:
+        _PREFETCH = subprocess.Popen(
+            [sys.executable, "-c", "from interaction_tensor.engine.backends import "
+                                   "compile_cache_kernels; compile_cache_kernels()"],
+            env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    except OSError:                 # no process can be started: compile when scoring
+        _PREFETCH = None
+
+
+def await_cache_kernels() -> None:
+    """Wait for :func:`prefetch_cache_kernels`'s process, if one runs."""
+    global _PREFETCH
+    if _PREFETCH is not None:
+        _PREFETCH.wait()
+        _PREFETCH = None
+
+
+def compile_cache_kernels() -> None:
+    """Score a small synthetic scene through the neighbour cache, with the argument types
+    detection uses (int32 point and int16 orientation indices, float64 positions), so that
+    Numba compiles and caches the cache's kernels."""
+    rng = np.random.default_rng(0)
+    g = np.stack(np.meshgrid(np.arange(60), np.arange(60)), -1).reshape(-1, 2) * 0.01
+    pts = np.column_stack([g, np.zeros(len(g))])
+    scene = Scene(pts, np.tile([0.0, 0.0, 1.0], (len(pts), 1)), 0.01)
+    n = 64
+    table = make_table(rng.normal(scale=0.05, size=(n, 3)), rng.normal(scale=0.02, size=(n, 3)),
+                       rng.random(n), 8, "paper", np.pi / 18, 5.0, 0.4)
+    cand = np.arange(0, len(pts), 37, dtype=np.int32)
+    job = ScoreJob(np.repeat(cand, 8), np.tile(np.arange(8, dtype=np.int16), len(cand)),
+                   table, 0.5, "surface", scene.spacing, EXIT_AT_REJECTION)
+    NumbaBackend(scene).score([job], 8, 64, grouped=True, cache=True)

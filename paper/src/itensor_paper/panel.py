@@ -1,0 +1,285 @@
+"""The blind panel: people's verdicts, which the judge is a model of and is checked against.
+
+Raters see each pose as two views of one picture, the posed object in one neutral colour,
+with nothing that tells the method, the rank, the score or any verdict; they are asked only
+the affordance's question (:attr:`interaction_tensor.affordances.Affordance.question`) and
+answer yes or no. Their verdicts are kept as labelled data (``data/panel.csv``: the pose,
+where it came from, each rater's answer), and :func:`agreement` measures how often the judge
+says what the panel's majority says.
+
+:func:`select` draws the poses of a panel from an evaluation's judged poses (its
+``judgements.csv``): per affordance, from several scenes, from iT's top and bottom and from
+Naive's top, in a seeded order; :func:`draw` renders them as rating sheets of a few poses
+each, labelled only by an id, with a key that maps ids back (kept from the raters).
+"""
+
+from __future__ import annotations
+
+import csv
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from interaction_tensor import affordances
+from interaction_tensor.geometry.files import atomic_path, write_json
+from interaction_tensor.geometry.load import load_geometry
+from interaction_tensor.outputs.render import _font
+from itensor_paper.common import write_csv
+from itensor_paper.judge import Judge, JudgeScene
+from itensor_paper.pictures import PANEL, _samples, closeup
+
+#: The one colour every posed object is drawn in.
+NEUTRAL = (196, 150, 82)
+#: The file of the panel's verdicts, shipped with the package.
+DATA_FILE = Path(__file__).resolve().parent / "data" / "panel.csv"
+#: Its columns: the pose and where it came from, the raters' answers (``yes``/``no``,
+#: ``;``-separated, one per rater) and the held-out flag (poses the judge was not fixed on).
+COLUMNS = ["id", "affordance", "example", "scene", "method", "group", "rank", "held_out",
+           "answers", "pose"]
+#: Where the panel's poses come from: (method, group) and its share of an affordance's poses.
+SOURCES = (("iT-weighted", "top", 0.4), ("iT-weighted", "bottom", 0.3), ("Naive", "top", 0.3))
+
+
+@dataclass
+class PanelPose:
+    """One pose shown to the panel."""
+
+    id: str
+    affordance: str
+    example: str
+    scene: str
+    method: str
+    group: str
+    rank: int
+    pose: np.ndarray
+    held_out: bool = True
+    answers: list = field(default_factory=list)
+
+    @property
+    def majority(self) -> bool | None:
+        """The panel's verdict: True when more raters said yes than no, None on a tie or with
+        no answer."""
+        yes = sum(a == "yes" for a in self.answers)
+        no = sum(a == "no" for a in self.answers)
+        return None if yes == no else yes > no
+
+    def row(self) -> dict:
+        return {"id": self.id, "affordance": self.affordance, "example": self.example,
+                "scene": self.scene, "method": self.method, "group": self.group,
+                "rank": self.rank, "held_out": self.held_out,
+                "answers": ";".join(self.answers),
+                "pose": " ".join(f"{v:.6g}" for v in np.asarray(self.pose).ravel())}
+
+
+#: Scenes whose poses the judge's rules may be fixed on; the others' poses are held out to
+#: measure the judge (a rule fitted to a scene's furniture cannot pass for agreement there).
+DEVELOPMENT_SCENES = ("kitchen3", "kitchen5", "living-room2", "living-room4", "office-desk2",
+                      "office-desk6")
+
+
+def select(judgements, per_affordance: int = 60, seed: int = 0, affordance_names=None,
+           scenes=None, first_id: int = 1) -> list:
+    """Poses for a panel from an evaluation's judged poses (rows of its ``judgements.csv``):
+    per affordance ``per_affordance`` of them, :data:`SOURCES` in their shares, taken scene by
+    scene in turn (so that every scene gives some), each source's poses in a seeded order;
+    only from ``scenes`` when given. Returns :class:`PanelPose` s with ids in a seeded random
+    order (``P0001``, ... from ``first_id``), held out unless their scene is one of
+    :data:`DEVELOPMENT_SCENES`."""
+    rng = np.random.default_rng(seed)
+    rows = [r for r in judgements if r.get("pose") and (scenes is None or r["scene"] in scenes)]
+    names = affordance_names or affordances.names()
+    picked = []
+    for aff in names:
+        for method, group, share in SOURCES:
+            want = int(round(share * per_affordance))
+            pool = [r for r in rows if r["affordance"] == aff and r["method"] == method
+                    and r["group"] == group]
+            by_scene: dict = {}
+            for r in pool:
+                by_scene.setdefault(r["scene"], []).append(r)
+            for scene_rows in by_scene.values():
+                rng.shuffle(scene_rows)
+            scenes = sorted(by_scene)
+            rng.shuffle(scenes)
+            taken = []
+            while len(taken) < want and any(by_scene[s] for s in scenes):
+                for s in scenes:
+                    if by_scene[s] and len(taken) < want:
+                        taken.append(by_scene[s].pop())
+            picked += taken
+    order = rng.permutation(len(picked))
+    out = []
+    for k, i in enumerate(order):
+        r = picked[i]
+        out.append(PanelPose(f"P{first_id + k:04d}", r["affordance"], r["example"], r["scene"],
+                             r["method"], r["group"], int(r["rank"]),
+                             np.array([float(v) for v in r["pose"].split()]).reshape(4, 4),
+                             r["scene"] not in DEVELOPMENT_SCENES))
+    return sorted(out, key=lambda p: p.id)
+
+
+def shuffled_ids(poses, seed: int = 0) -> list:
+    """``poses`` with new ids (``Q0001``, ...) in a seeded random order, so that an id says
+    nothing about where its pose came from."""
+    order = np.random.default_rng(seed).permutation(len(poses))
+    for k, i in enumerate(order):
+        poses[i].id = f"Q{k + 1:04d}"
+    return sorted(poses, key=lambda p: p.id)
+
+
+def _views(scene_samples, query_samples, pose) -> np.ndarray:
+    """(H, 2W, 3) uint8: the pose from the side that sees most of the object, and from a
+    quarter turn around and higher up."""
+    sp, sn = scene_samples
+    qp, qn = query_samples
+    first = closeup(sp, sn, qp, qn, pose, NEUTRAL)
+    # the second view: every azimuth a quarter turn from the first's candidates, from above
+    second = closeup(sp, sn, qp, qn, pose, NEUTRAL, azimuths=(120, 210, 300, 30),
+                     elevation=55.0)
+    return np.concatenate([first, second], axis=1)
+
+
+def draw(poses, scenes_dir, objects_dir, out_dir, per_sheet: int = 4) -> Path:
+    """Rating sheets of ``poses`` (:class:`PanelPose`) in ``out_dir``: per affordance,
+    ``<affordance>/sheet_NN.png`` with ``per_sheet`` poses each (two views a pose, its id
+    beside it, nothing else), ``<affordance>/question.txt`` (the affordance's question and
+    how to answer) and, for the panel's keeper, ``key.csv`` (ids and where the poses come
+    from). Returns ``out_dir``."""
+    from PIL import Image, ImageDraw
+
+    out_dir = Path(out_dir)
+    by_aff: dict = {}
+    for p in poses:
+        by_aff.setdefault(p.affordance, []).append(p)
+    queries, scenes = {}, {}
+    for aff, items in sorted(by_aff.items()):
+        items.sort(key=lambda p: p.id)
+        folder = out_dir / aff
+        folder.mkdir(parents=True, exist_ok=True)
+        for s in range(0, len(items), per_sheet):
+            chunk = items[s:s + per_sheet]
+            w, h = 2 * PANEL[0], PANEL[1]
+            img = Image.new("RGB", (w + 90, len(chunk) * (h + 6)), (255, 255, 255))
+            d = ImageDraw.Draw(img)
+            for k, p in enumerate(chunk):
+                if p.example not in queries:
+                    ex = affordances.build(p.example, objects_dir)
+                    queries[p.example] = _samples(ex.query, 0.004)
+                if p.scene not in scenes:
+                    scenes[p.scene] = _samples(load_geometry(Path(scenes_dir) / f"{p.scene}.ply"),
+                                               0.01)
+                y = k * (h + 6)
+                img.paste(Image.fromarray(_views(scenes[p.scene], queries[p.example], p.pose)),
+                          (90, y))
+                d.rectangle([90, y, 90 + w - 1, y + h - 1], outline=(200, 200, 200))
+                d.text((8, y + h // 2 - 10), p.id, fill=(20, 20, 20), font=_font(18))
+            with atomic_path(folder / f"sheet_{s // per_sheet + 1:02d}.png") as tmp:
+                img.save(tmp, format="PNG", optimize=True)
+        aff_q = affordances.get(aff).question
+        (folder / "question.txt").write_text(
+            f"{aff_q}\n\nEach row of a sheet shows one pose of the object (drawn in one "
+            "colour) in a scene, from two sides. For each id, answer yes or no to the "
+            "question, as you would judge the place in a real room.\n")
+    write_csv(out_dir / "key.csv", [p.row() for p in poses], COLUMNS)
+    write_json(out_dir / "poses.json", {"count": len(poses),
+                                         "per_affordance": {a: len(v) for a, v in
+                                                            by_aff.items()}})
+    return out_dir
+
+
+def load(path=DATA_FILE) -> list:
+    """The panel's poses and verdicts (:data:`DATA_FILE`)."""
+    path = Path(path)
+    if not path.exists():
+        return []
+    with open(path, newline="") as fh:
+        return [PanelPose(r["id"], r["affordance"], r["example"], r["scene"], r["method"],
+                          r["group"], int(r["rank"]),
+                          np.array([float(v) for v in r["pose"].split()]).reshape(4, 4),
+                          r["held_out"] == "True",
+                          [a for a in r["answers"].split(";") if a])
+                for r in csv.DictReader(fh)]
+
+
+def save(poses, path=DATA_FILE) -> Path:
+    """Write the panel's poses and verdicts (atomically)."""
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        write_csv(tmp, [p.row() for p in poses], COLUMNS)
+    return path
+
+
+def judge_poses(poses, scenes_dir, objects_dir=None, log=None) -> dict:
+    """The judge's verdict on each pose of the panel whose scene is in ``scenes_dir``:
+    ``{id: valid}``."""
+    judges, scenes, out = {}, {}, {}
+    for p in sorted(poses, key=lambda p: (p.scene, p.example)):
+        path = Path(scenes_dir) / f"{p.scene}.ply"
+        if not path.exists():
+            continue
+        if p.scene not in scenes:
+            scenes[p.scene] = JudgeScene(load_geometry(path))
+            if log:
+                log(f"panel: judging the poses in {p.scene}")
+        if p.example not in judges:
+            judges[p.example] = Judge.for_example(affordances.build(p.example, objects_dir))
+        out[p.id] = bool(judges[p.example].judge(scenes[p.scene], p.pose).valid)
+    return out
+
+
+def agreement(poses, judged: dict, held_out_only: bool = True) -> list:
+    """Per affordance (and overall): how many poses the panel decided (a majority), on how
+    many of them the judge agrees, and that share in %. ``judged`` maps a pose's id to the
+    judge's verdict (True: valid)."""
+    rows, total = [], [0, 0]
+    for aff in affordances.names():
+        items = [p for p in poses if p.affordance == aff and p.majority is not None
+                 and (p.held_out or not held_out_only) and p.id in judged]
+        agree = sum(judged[p.id] == p.majority for p in items)
+        rows.append({"affordance": aff, "poses": len(items), "agree": agree,
+                     "agreement": round(100.0 * agree / len(items), 1) if items else None})
+        total[0] += len(items)
+        total[1] += agree
+    rows.append({"affordance": "all", "poses": total[0], "agree": total[1],
+                 "agreement": round(100.0 * total[1] / total[0], 1) if total[0] else None})
+    return rows
+
+
+def answers_from(path) -> dict:
+    """A rater's answers: ``{id: "yes" | "no"}`` from a CSV of ``id,answer`` lines (a header
+    line is skipped; anything but yes or no is refused)."""
+    out = {}
+    with open(path, newline="") as fh:
+        for row in csv.reader(fh):
+            if not row or row[0].strip().lower() == "id":
+                continue
+            pid, ans = row[0].strip(), row[1].strip().lower()
+            if ans not in ("yes", "no"):
+                raise ValueError(f"{path}: answer for {pid} is {ans!r}, not yes or no")
+            out[pid] = ans
+    return out
+
+
+def merge_answers(poses, *answer_files) -> list:
+    """``poses`` with each file's answers appended (a rater a file)."""
+    by_id = {p.id: p for p in poses}
+    for f in answer_files:
+        for pid, ans in answers_from(f).items():
+            if pid in by_id:
+                by_id[pid].answers.append(ans)
+    return poses
+
+
+def add_panel_agreement(rows: list, scenes_dir, objects_dir=None, log=None) -> list:
+    """The judge's accuracy ``rows`` (per affordance, :func:`~.labelled.judge_accuracy`) with
+    its agreement with the panel's majority on the held-out poses beside it (``panel_n``,
+    ``panel_agree``, ``panel_agreement`` %), judged in the scenes of ``scenes_dir``."""
+    poses = load()
+    judged = judge_poses([p for p in poses if p.held_out], scenes_dir, objects_dir, log)
+    by_aff = {r["affordance"]: r for r in agreement(poses, judged)}
+    for r in rows:
+        a = by_aff.get(r["affordance"], {})
+        r["panel_n"], r["panel_agree"] = a.get("poses", 0), a.get("agree", 0)
+        r["panel_agreement"] = a.get("agreement")
+    return rows

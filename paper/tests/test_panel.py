@@ -1,0 +1,84 @@
+"""The blind panel: poses drawn from an evaluation's verdicts without anything that tells
+where they came from, the raters' answers kept as labelled data, and the judge's agreement
+with the panel's majority."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from itensor_paper import panel
+
+from paper_support import shared_file
+
+
+def _rows():
+    rows = []
+    for aff, example in (("placing", "placing-bowl"), ("hanging", "hanging-hanger")):
+        for scene in ("kitchen3", "kitchen1", "office-desk1"):
+            for method, group in (("iT-weighted", "top"), ("iT-weighted", "bottom"),
+                                  ("Naive", "top")):
+                for rank in range(1, 6):
+                    pose = np.eye(4)
+                    pose[:3, 3] = (rank, len(rows), 0.75)
+                    rows.append({"affordance": aff, "example": example, "scene": scene,
+                                 "method": method, "group": group, "rank": str(rank),
+                                 "pose": " ".join(map(str, pose.ravel()))})
+    return rows
+
+
+def test_poses_are_drawn_from_every_source_and_scene_and_held_out_by_scene():
+    poses = panel.select(_rows(), per_affordance=10, seed=3)
+    assert len(poses) == 20 and len({p.id for p in poses}) == 20
+    for aff in ("placing", "hanging"):
+        mine = [p for p in poses if p.affordance == aff]
+        assert {(p.method, p.group) for p in mine} == {("iT-weighted", "top"),
+                                                         ("iT-weighted", "bottom"),
+                                                         ("Naive", "top")}
+        assert len({p.scene for p in mine}) == 3
+    assert all(p.held_out == (p.scene not in panel.DEVELOPMENT_SCENES) for p in poses)
+    again = panel.shuffled_ids(panel.select(_rows(), per_affordance=10, seed=3), 5)
+    assert sorted(p.id for p in again) == [f"Q{k:04d}" for k in range(1, 21)]
+
+
+def test_answers_make_the_labelled_data_and_the_agreement(tmp_path):
+    poses = panel.shuffled_ids(panel.select(_rows(), per_affordance=10, seed=3), 5)
+    panel.save(poses, tmp_path / "key.csv")
+    ids = [p.id for p in poses]
+    for rater, says in (("a", "yes"), ("b", "yes"), ("c", "no")):
+        (tmp_path / f"{rater}.csv").write_text("id,answer\n" + "".join(
+            f"{i},{says if k % 2 else 'no'}\n" for k, i in enumerate(ids)))
+    merged = panel.merge_answers(panel.load(tmp_path / "key.csv"), *(tmp_path / f"{r}.csv"
+                                                                     for r in "abc"))
+    panel.save(merged, tmp_path / "panel.csv")
+    back = panel.load(tmp_path / "panel.csv")
+    assert [p.answers for p in back] == [p.answers for p in merged]
+    assert [p.majority for p in back] == [bool(k % 2) for k in range(len(ids))]
+    np.testing.assert_allclose(back[0].pose, poses[0].pose)
+    judged = {p.id: True for p in back}
+    rows = {r["affordance"]: r for r in panel.agreement(back, judged, held_out_only=False)}
+    assert rows["all"]["poses"] == 20 and rows["all"]["agree"] == 10
+    (tmp_path / "bad.csv").write_text("Q0001,maybe\n")
+    with pytest.raises(ValueError, match="not yes or no"):
+        panel.answers_from(tmp_path / "bad.csv")
+
+
+def test_sheets_show_ids_and_no_verdict(tmp_path):
+    objects = shared_file("objects/paper_bowl.ply").parent
+    scenes = shared_file("scenes/office-desk1.ply").parent
+    pose = np.eye(4)
+    pose[:3, 3] = (0.5, 0.3, 0.75)
+    poses = [panel.PanelPose("Q0001", "placing", "placing-bowl", "office-desk1", "Naive",
+                             "top", 1, pose)]
+    panel.draw(poses, scenes, objects, tmp_path / "sheets")
+    from PIL import Image
+
+    img = np.asarray(Image.open(tmp_path / "sheets" / "placing" / "sheet_01.png").convert("RGB"))
+    hue = img.astype(int) - panel.NEUTRAL
+    drawn = (img[..., 0] > img[..., 2] + 40) & (np.abs(hue).sum(axis=2) < 200)
+    assert drawn.sum() > 200                      # the object, in the one colour, both views
+    assert drawn[:, img.shape[1] // 2:].sum() > 50
+    question = (tmp_path / "sheets" / "placing" / "question.txt").read_text()
+    assert question.startswith("Could this object be put down here")
+    assert not any(w in question for w in ("Naive", "iT", "score", "valid"))
+    assert (tmp_path / "sheets" / "key.csv").read_text().count("\n") == 2
