@@ -29,7 +29,7 @@ from interaction_tensor.api import CLEANING_OPTIONS, load_scene, load_tensor
 from interaction_tensor.descriptor.tensor import InteractionTensor
 from interaction_tensor.detection.search import detect_many
 from interaction_tensor.errors import InputError, ItensorError, SettingsError
-from interaction_tensor.geometry.files import atomic_path, write_json
+from interaction_tensor.geometry.files import atomic_path, output_path, write_json
 from interaction_tensor.settings import DetectSettings
 
 #: columns of summary.csv
@@ -243,7 +243,7 @@ def batch(scenes, tensors, outdir, settings: DetectSettings | None = None, *, cl
 
 
     t0 = time.perf_counter()
-    outdir = Path(outdir)
+    outdir = output_path(outdir, "output directory")
     if outdir.exists() and not outdir.is_dir():
         raise InputError(outdir, "exists and is not a directory")
     names = {f.name for f in fields(DetectSettings)}

@@ -23,6 +23,7 @@ from interaction_tensor.cli.common import (  # noqa: F401
     Parser,
     _axis_or_vector,
     _fraction,
+    _out_file,
     _out_path,
     _say,
     _show_progress,
@@ -162,6 +163,7 @@ def real_scene_options(parser) -> None:
 # --------------------------------------------------------------------------- train
 def cmd_train(args) -> int:
 
+    _out_file(args.output, "-o/--output", "the descriptor file to write (.npz)")
     t0 = time.perf_counter()
     tensor = train(args.query, args.scene_object, args.affordance, acceptance=args.acceptance,
                    normal=args.normal, spacing=args.spacing, query_points=args.query_points,
@@ -331,6 +333,7 @@ def cmd_detect(args) -> int:
 # --------------------------------------------------------------------------- batch
 def cmd_batch(args) -> int:
 
+    _out_path(args.output)
     if args.workers is not None and args.workers < 0:
         raise SettingsError(f"--workers must be 0 (this process) or more, got {args.workers}")
     if args.workers is not None and args.scheduler is not None:

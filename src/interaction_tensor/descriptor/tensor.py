@@ -32,7 +32,7 @@ from interaction_tensor.geometry.collision import (
     through_section,
 )
 from interaction_tensor.geometry.core import Geometry, validate_geometry
-from interaction_tensor.geometry.files import atomic_path
+from interaction_tensor.geometry.files import atomic_path, output_path
 from interaction_tensor.geometry.sampling import (
     estimate_normals,
     mean_spacing,
@@ -586,7 +586,7 @@ class InteractionTensor:
     # ------------------------------------------------------------------ files
     def save(self, path) -> Path:
         """Write the descriptor as one ``.npz`` (no pickle) with JSON metadata, atomically."""
-        path = Path(path)
+        path = output_path(path, "descriptor file")
         header = {
             "format": FORMAT, "format_version": FORMAT_VERSION, "affordance": self.affordance,
             "radius": self.radius, "scene_spacing": self.scene_spacing, "vectors": self.vectors,

@@ -20,6 +20,14 @@ import numpy as np
 from interaction_tensor.errors import InputError
 
 
+def output_path(path, what: str = "output file") -> Path:
+    """``path`` as a Path; an empty one is refused in one line (``Path("")`` is the working
+    directory, where a result would land unasked or be refused as a directory named '.')."""
+    if path is None or (isinstance(path, str) and not path.strip()):
+        raise InputError(None, f"the {what} path is empty; give one")
+    return Path(path)
+
+
 def make_dirs(directory, target=None) -> None:
     """``mkdir -p directory``; failures (a file in the way, no permission) become one-line
     errors naming ``target`` (default: the directory)."""
@@ -40,7 +48,7 @@ def atomic_path(path):
 
     An interrupted or failed write leaves ``path`` as it was.
     """
-    path = Path(path)
+    path = output_path(path)
     make_dirs(path.parent, path)
     if path.is_dir():
         raise InputError(path, "cannot write: it is a directory")
@@ -73,7 +81,7 @@ def atomic_dir(path, marker: str, allowed=None):
     A lock file beside ``path`` (``.NAME.lock``) makes a second run into the same directory
     refuse while the first is writing; temporaries left by a killed run are removed.
     """
-    path = Path(path)
+    path = output_path(path, "output directory")
     _check_replaceable(path, marker, allowed)
     make_dirs(path.parent, path)
     with _directory_lock(path):
