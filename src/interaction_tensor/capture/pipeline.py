@@ -195,7 +195,7 @@ def prepare_real_scene(geometry: Geometry, spacing: float = 0.01, camera=None, *
     if voxel > 0:
         t = time.perf_counter()
         n0 = len(points)
-        points, colors = voxel_down_sample(points, colors, voxel)
+        points, colors = voxel_down_sample(points, colors, voxel, geometry.source)
         _step(report, "voxel_down_sample", n0, len(points), {"voxel_size_m": voxel}, t)
     if remove_outliers and len(points) > outlier_neighbors + 1:
         t = time.perf_counter()

@@ -124,9 +124,9 @@ def real_scene_options(parser) -> None:
     g.add_argument("--depth", help="depth image (single-channel 16-bit PNG)")
     g.add_argument("--intrinsics", help="JSON with width, height, fx, fy, cx, cy "
                                         "[, depth_scale, depth_trunc]")
-    g.add_argument("--depth-scale", type=number(low=0, low_open=True), default=None,
+    g.add_argument("--depth-scale", type=number(low=0, high=1e6, low_open=True), default=None,
                    help="depth units per metre (overrides the JSON; TUM 5000, mm PNG 1000)")
-    g.add_argument("--depth-trunc", type=number(low=0, low_open=True), default=None,
+    g.add_argument("--depth-trunc", type=number(low=0, high=100, low_open=True), default=None,
                    help="ignore depth beyond this many metres (overrides the JSON)")
     g.add_argument("--scan", action="store_true",
                    help="SCENE is a captured point cloud (or scanned mesh): clean and align it")
