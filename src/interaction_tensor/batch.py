@@ -143,7 +143,10 @@ def run_scene(job: dict) -> list[dict]:
             groups.setdefault(spacing, []).append(item)
         for spacing, items in groups.items():
             t0 = time.perf_counter()
-            scene = load_scene(job["scene"], spacing, seed=settings.seed, **job["scene_options"])
+            scene = load_scene(job["scene"], spacing, seed=settings.seed,
+                               pairs_per_point=(settings.sample_fraction
+                                                * settings.n_orientations * len(items)),
+                               **job["scene_options"])
             t_prep = time.perf_counter() - t0
             dets = detect_many(scene, [t for _, _, t in items], settings)
             for (name, path, _), det in zip(items, dets):
