@@ -28,7 +28,7 @@ from interaction_tensor.detection.search import detect_many
 from interaction_tensor.errors import InputError, SettingsError
 from interaction_tensor.geometry.core import MAX_OBJECT_EXTENT, Geometry
 from interaction_tensor.geometry.load import as_geometry
-from interaction_tensor.geometry.scene import Scene, prepare_scene
+from interaction_tensor.geometry.scene import MAX_MESH_SAMPLES, Scene, prepare_scene
 from interaction_tensor.settings import MIN_SPACING, DetectSettings, TrainSettings
 
 #: cleaning and alignment options of frames and scans (see :func:`prepare_real_scene`)
@@ -121,8 +121,8 @@ def train(query, scene_object, affordance: str = "interaction", *, acceptance: s
 def load_scene(scene=None, spacing: float = 0.01, *, scan: bool = False, normals=None,
                color=None, depth=None, intrinsics=None, depth_scale: float | None = None,
                depth_trunc: float | None = None, scale: float | None = None, up="auto",
-               seed: int = 0,
-               max_points: int = 5_000_000, **cleaning):
+               seed: int = 0, max_points: int = MAX_MESH_SAMPLES,
+               pairs_per_point: float | None = None, progress: bool = False, **cleaning):
     """A :class:`Scene` ready for detection, from any input (what ``itensor detect`` does).
 
     Parameters
@@ -142,6 +142,11 @@ def load_scene(scene=None, spacing: float = 0.01, *, scan: bool = False, normals
     up : up axis of the input: ``"auto"`` (``"z"`` for a plain scene; searched for a scan; the
         camera's -Y for a frame), ``"z"``, ``"y"``, ``"-y"``, ... or a 3-vector (scans, frames)
     seed : seed of mesh sampling and RANSAC
+    max_points : most samples of a mesh (more is refused before sampling) or points of a
+        cleaned frame or scan (more are thinned at random)
+    pairs_per_point : what detection will do with each point (sample fraction x
+        orientations), checked with the memory before any work (:func:`.scene.check_memory`)
+    progress : show a progress bar while a cloud's normals are estimated
     cleaning : options of :func:`prepare_real_scene` for frames and scans: ``align``,
         ``max_tilt_deg``, ``voxel_size``, ``remove_outliers``, ``outlier_neighbors``,
         ``outlier_std``, ``plane_distance``, ``normals_orientation`` (camera, up or none)
@@ -178,7 +183,8 @@ def load_scene(scene=None, spacing: float = 0.01, *, scan: bool = False, normals
                                 "'z' or 'y'")
         geometry = as_geometry(scene, normals, scale=scale, up="z" if up == "auto" else up,
                                name="scene")
-        return prepare_scene(geometry, spacing, seed, max_points)
+        return prepare_scene(geometry, spacing, seed, max_points,
+                             pairs_per_point=pairs_per_point, progress=progress)
 
     if frame:
         color, depth, intrinsics = _frame_paths(scene if is_dir else None, color, depth,
@@ -270,7 +276,9 @@ def detect(scene, tensor, settings: DetectSettings | None = None, *, progress: b
         raise SettingsError(str(exc)) from None
     t0 = time.perf_counter()
     spacing = settings.scene_spacing or tensor.scene_spacing
-    prepared = load_scene(scene, spacing, seed=settings.seed, **options)
+    prepared = load_scene(scene, spacing, seed=settings.seed, progress=progress,
+                          pairs_per_point=settings.sample_fraction * settings.n_orientations,
+                          **options)
     t_prep = time.perf_counter() - t0
     result = detect_many(prepared, [tensor], settings, progress, test_indices)[0]
     if prepared is not scene:

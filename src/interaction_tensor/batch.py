@@ -29,7 +29,7 @@ from interaction_tensor.api import CLEANING_OPTIONS, load_scene, load_tensor
 from interaction_tensor.descriptor.tensor import InteractionTensor
 from interaction_tensor.detection.search import detect_many
 from interaction_tensor.errors import InputError, ItensorError, SettingsError
-from interaction_tensor.geometry.files import atomic_path, write_json
+from interaction_tensor.geometry.files import atomic_path, output_path, write_json
 from interaction_tensor.settings import DetectSettings
 
 #: columns of summary.csv
@@ -143,7 +143,10 @@ def run_scene(job: dict) -> list[dict]:
             groups.setdefault(spacing, []).append(item)
         for spacing, items in groups.items():
             t0 = time.perf_counter()
-            scene = load_scene(job["scene"], spacing, seed=settings.seed, **job["scene_options"])
+            scene = load_scene(job["scene"], spacing, seed=settings.seed,
+                               pairs_per_point=(settings.sample_fraction
+                                                * settings.n_orientations * len(items)),
+                               **job["scene_options"])
             t_prep = time.perf_counter() - t0
             dets = detect_many(scene, [t for _, _, t in items], settings)
             for (name, path, _), det in zip(items, dets):
@@ -243,7 +246,7 @@ def batch(scenes, tensors, outdir, settings: DetectSettings | None = None, *, cl
 
 
     t0 = time.perf_counter()
-    outdir = Path(outdir)
+    outdir = output_path(outdir, "output directory")
     if outdir.exists() and not outdir.is_dir():
         raise InputError(outdir, "exists and is not a directory")
     names = {f.name for f in fields(DetectSettings)}

@@ -39,13 +39,27 @@ def _arrays(pc):
 
 
 # ============================================================================ cleaning
-def voxel_down_sample(points, colors=None, voxel_size: float = 0.01):
-    """Average the points (and colours) in each ``voxel_size`` (m) cube.
+#: Voxels along the longest side Open3D's down-sampling indexes (its ``int``): a longer
+#: cloud is refused (a wrong scale, or a focal length no camera has) instead of Open3D's
+#: "voxel_size is too small".
+MAX_VOXELS_PER_SIDE = 2 ** 31 - 1
+
+
+def voxel_down_sample(points, colors=None, voxel_size: float = 0.01, source=None):
+    """Average the points (and colours) in each ``voxel_size`` (m) cube. ``source`` names
+    the input in the refusal of a cloud too long for that voxel size.
 
     Returns (points (M, 3) float64, colors (M, 3) uint8 or None).
     """
     if not voxel_size > 0:
         raise SettingsError("voxel_size must be positive (metres)")
+    points = np.asarray(points, float)
+    extent = float(np.ptp(points, axis=0).max()) if len(points) else 0.0
+    if extent >= voxel_size * MAX_VOXELS_PER_SIDE:
+        raise InputError(source, f"the cloud spans {extent:.3g} m, more than "
+                                 f"{MAX_VOXELS_PER_SIDE:,} voxels of {voxel_size:g} m; is its "
+                                 "scale right (scale=, --scale)? Else give a larger voxel size "
+                                 "(voxel_size=, --voxel-size)")
     pc = _cloud(points, colors=colors).voxel_down_sample(float(voxel_size))
     pts, _, col = _arrays(pc)
     return pts, col

@@ -25,7 +25,7 @@ from interaction_tensor.capture.cleaning import (
 from interaction_tensor.errors import InputError, SettingsError
 from interaction_tensor.geometry.core import Geometry, validate_geometry
 from interaction_tensor.geometry.sampling import mean_spacing, mesh_area, sample_mesh
-from interaction_tensor.geometry.scene import Scene
+from interaction_tensor.geometry.scene import Scene, mesh_samples
 
 #: Largest scene extent (m) that does not trigger the "wrong units?" warning.
 PLAUSIBLE_EXTENT_M = 30.0
@@ -134,7 +134,8 @@ def prepare_real_scene(geometry: Geometry, spacing: float = 0.01, camera=None, *
     Parameters
     ----------
     geometry : Geometry, metres (already multiplied by ``scale``); a point cloud (RGB-D
-        frame, scan) or a mesh (sampled at ``spacing / 2`` first)
+        frame, scan) or a mesh (sampled at ``spacing / 2`` first; refused before that when
+        its area at ``spacing`` means more than ``max_points`` samples)
     spacing : target point spacing (m): the voxel size unless ``voxel_size`` says otherwise;
         use the descriptor's ``scene_spacing``
     camera : (3,) sensor position in the input frame (the origin for a frame), or None
@@ -184,6 +185,7 @@ def prepare_real_scene(geometry: Geometry, spacing: float = 0.01, camera=None, *
     points, colors = geometry.vertices, geometry.colors
     if geometry.is_mesh:
         t = time.perf_counter()
+        mesh_samples(geometry, spacing, max_points)     # what the voxels keep: refused if huge
         count = int(np.clip(round(mesh_area(geometry) / (spacing / 2) ** 2), 100, max_points))
         points, _ = sample_mesh(geometry, count, seed)
         colors = None
@@ -195,7 +197,7 @@ def prepare_real_scene(geometry: Geometry, spacing: float = 0.01, camera=None, *
     if voxel > 0:
         t = time.perf_counter()
         n0 = len(points)
-        points, colors = voxel_down_sample(points, colors, voxel)
+        points, colors = voxel_down_sample(points, colors, voxel, geometry.source)
         _step(report, "voxel_down_sample", n0, len(points), {"voxel_size_m": voxel}, t)
     if remove_outliers and len(points) > outlier_neighbors + 1:
         t = time.perf_counter()

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from interaction_tensor.errors import InputError
+from interaction_tensor.errors import InputError, SettingsError
 from interaction_tensor.geometry.core import Geometry, validate_geometry
 
 #: Depth conventions when neither the intrinsics file nor the caller gives them: 1000 units
@@ -29,6 +29,14 @@ DEPTH_JUMP_REL = 0.02
 #: k-th pixel (k the smallest stride that fits), which bounds the collision model's memory
 #: (python-fcl's BVH, a few hundred bytes a triangle) whatever the camera.
 MAX_FRAME_FACES = 1_000_000
+#: What intrinsics may hold, checked before any image is read: images of at most this many
+#: pixels a side; focal lengths (pixels) from 0.05 x the image's shorter side (a 175-degree
+#: view: nothing a pinhole model describes is wider) to 20 x its longer side (a 3-degree
+#: telephoto); at most this many depth units per metre (a micrometre PNG) and this range (m).
+MAX_IMAGE_SIDE = 16384
+FOCAL_MIN_FACTOR, FOCAL_MAX_FACTOR = 0.05, 20.0
+MAX_DEPTH_SCALE = 1e6
+MAX_DEPTH_TRUNC = 100.0
 
 
 # ============================================================================ intrinsics
@@ -56,9 +64,68 @@ class Intrinsics:
     depth_trunc: float = DEFAULT_DEPTH_TRUNC
     source: str = "<intrinsics>"
 
+    def __post_init__(self):
+        check_intrinsics({k: getattr(self, k) for k in _FIELDS}, self.source)
+
     def to_dict(self) -> dict:
-        return {k: getattr(self, k) for k in ("width", "height", "fx", "fy", "cx", "cy",
-                                              "depth_scale", "depth_trunc", "source")}
+        return {k: getattr(self, k) for k in _FIELDS + ("source",)}
+
+
+_FIELDS = ("width", "height", "fx", "fy", "cx", "cy", "depth_scale", "depth_trunc")
+
+
+def check_intrinsics(values: dict, source, overridden=()) -> None:
+    """Refuse intrinsics no camera has, before anything uses them: ``values`` maps each of
+    width, height, fx, fy, cx, cy, depth_scale and depth_trunc to a number. The image at
+    most :data:`MAX_IMAGE_SIDE` pixels a side, whole; focal lengths within
+    :data:`FOCAL_MIN_FACTOR` x the shorter side and :data:`FOCAL_MAX_FACTOR` x the longer
+    side; the principal point inside the image; depth_scale in (0, :data:`MAX_DEPTH_SCALE`]
+    units per metre and depth_trunc in (0, :data:`MAX_DEPTH_TRUNC`] m. Raises
+    :class:`InputError` naming ``source`` and the field (:class:`SettingsError` for a value
+    in ``overridden``, which came from the caller, not the file)."""
+
+    def bad(key, message):              # message: what follows the field's name
+        if key in overridden:
+            raise SettingsError(f"{key}{message} (given to override {source})")
+        raise InputError(source, f"{key}{message}")
+
+    values = dict(values)
+    for key in _FIELDS:
+        value = values[key]
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer,
+                                                              np.floating)):
+            bad(key, f" must be a number, got {_short(value)}")
+        try:
+            values[key] = float(value)
+        except OverflowError:               # an integer too large for a float
+            values[key] = math.inf
+        if not math.isfinite(values[key]):
+            bad(key, f" must be finite, got {_short(value)}")
+    for key in ("width", "height"):
+        if values[key] != int(values[key]):
+            bad(key, f" must be a whole number of pixels, got {values[key]}")
+    for key in _FIELDS:
+        if not values[key] > 0 and key not in ("cx", "cy"):
+            bad(key, f" must be positive, got {values[key]:g}")
+    w, h = values["width"], values["height"]
+    for key in ("width", "height"):
+        if values[key] > MAX_IMAGE_SIDE:
+            bad(key, f" must be at most {MAX_IMAGE_SIDE} pixels, got {values[key]:.0f}")
+    low, high = FOCAL_MIN_FACTOR * min(w, h), FOCAL_MAX_FACTOR * max(w, h)
+    for key in ("fx", "fy"):
+        if not low <= values[key] <= high:
+            bad(key, f"={values[key]:g} pixels is no camera's focal length for a "
+                     f"{w:.0f}x{h:.0f} image (expected {low:g} to {high:g} pixels)")
+    if not 0 <= values["cx"] <= w:
+        bad("cx", f"={values['cx']:g} lies outside the image width {w:.0f}")
+    if not 0 <= values["cy"] <= h:
+        bad("cy", f"={values['cy']:g} lies outside the image height {h:.0f}")
+    if values["depth_scale"] > MAX_DEPTH_SCALE:
+        bad("depth_scale", f" must be at most {MAX_DEPTH_SCALE:g} depth units per metre, "
+                           f"got {values['depth_scale']:g}")
+    if values["depth_trunc"] > MAX_DEPTH_TRUNC:
+        bad("depth_trunc", f" must be at most {MAX_DEPTH_TRUNC:g} m, got "
+                           f"{values['depth_trunc']:g}")
 
 
 def load_intrinsics(path, overrides: dict | None = None) -> Intrinsics:
@@ -75,8 +142,9 @@ def load_intrinsics(path, overrides: dict | None = None) -> Intrinsics:
     overrides : dict or None; non-None values replace the file's (e.g. ``depth_scale``,
         ``depth_trunc`` from the command line)
 
-    Raises :class:`InputError` naming ``path`` when a value is missing, not a number, not
-    finite or not positive, or the principal point lies outside the image.
+    Raises :class:`InputError` naming ``path`` and the field when a value is missing, not a
+    number, or not what a camera has (:func:`check_intrinsics`); :class:`SettingsError`
+    when an override is not.
     """
     path = Path(path)
     if not path.exists():
@@ -97,9 +165,7 @@ def load_intrinsics(path, overrides: dict | None = None) -> Intrinsics:
         if not (isinstance(m, list) and len(m) == 9):
             raise InputError(path, "intrinsic_matrix must hold 9 numbers")
         data.update(fx=m[0], fy=m[4], cx=m[6], cy=m[7])
-    for key, value in (overrides or {}).items():
-        if value is not None:
-            data[key] = value
+    overridden = {key for key, value in (overrides or {}).items() if value is not None}
     values = {}
     for key in ("width", "height", "fx", "fy", "cx", "cy"):
         if key not in data:
@@ -107,31 +173,42 @@ def load_intrinsics(path, overrides: dict | None = None) -> Intrinsics:
         values[key] = _number(path, key, data[key])
     for key, default in (("depth_scale", DEFAULT_DEPTH_SCALE), ("depth_trunc", DEFAULT_DEPTH_TRUNC)):
         values[key] = _number(path, key, data.get(key, default))
-    for key in ("width", "height"):
-        if values[key] != int(values[key]):
-            raise InputError(path, f"{key} must be a whole number of pixels, got {values[key]}")
-    for key in ("width", "height", "fx", "fy", "depth_scale", "depth_trunc"):
-        if not values[key] > 0:
-            raise InputError(path, f"{key} must be positive, got {values[key]}")
-    if not 0 <= values["cx"] <= values["width"]:
-        raise InputError(path, f"cx={values['cx']} lies outside the image width {values['width']:.0f}")
-    if not 0 <= values["cy"] <= values["height"]:
-        raise InputError(path, f"cy={values['cy']} lies outside the image height {values['height']:.0f}")
+    for key in overridden:
+        values[key] = _number(path, key, overrides[key], override=True)
+    check_intrinsics(values, path, overridden)
     return Intrinsics(int(values["width"]), int(values["height"]), values["fx"], values["fy"],
                       values["cx"], values["cy"], values["depth_scale"], values["depth_trunc"],
                       str(path))
 
 
-def _number(path, key, value) -> float:
+def _number(path, key, value, override: bool = False) -> float:
+    """``value`` as a finite float; otherwise one line naming the file and ``key`` (or, for
+    a caller's ``override``, the setting)."""
+    def bad(message):
+        if override:
+            raise SettingsError(f"{key} {message} (given to override {path})")
+        raise InputError(path, f"{key} {message}")
+
     if isinstance(value, bool):
-        raise InputError(path, f"{key} must be a number, got {value!r}")
+        bad(f"must be a number, got {_short(value)}")
     try:
         number = float(value)
     except (TypeError, ValueError):
-        raise InputError(path, f"{key} must be a number, got {value!r}") from None
+        bad(f"must be a number, got {_short(value)}")
+    except OverflowError:                   # an integer too large for a float
+        bad(f"must be finite, got {_short(value)}")
     if not math.isfinite(number):
-        raise InputError(path, f"{key} must be finite, got {value!r}")
+        bad(f"must be finite, got {_short(value)}")
     return number
+
+
+def _short(value, limit: int = 60) -> str:
+    """``repr(value)`` on one line, cut to ``limit`` characters."""
+    try:
+        text = repr(value)
+    except ValueError:                      # an integer with too many digits to print
+        text = f"<{type(value).__name__}>"
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 # ============================================================================ RGB-D frames
@@ -146,7 +223,7 @@ def _open_image(path, what: str):
     try:
         image = Image.open(path)
         image.load()
-    except (UnidentifiedImageError, OSError, ValueError) as exc:
+    except (UnidentifiedImageError, OSError, ValueError, Image.DecompressionBombError) as exc:
         raise InputError(path, f"cannot read as an image: {exc}") from None
     return image
 

@@ -108,12 +108,18 @@ def _say(args, *parts) -> None:
 
 def _out_path(path) -> Path:
     """An output directory argument, checked but not created (results are swapped in)."""
-    if not str(path).strip():
-        raise InputError(None, "-o/--output is empty; give a directory")
-    path = Path(path)
+    path = _out_file(path, "-o/--output", "a directory")
     if path.exists() and not path.is_dir():
         raise InputError(path, "exists and is not a directory")
     return path
+
+
+def _out_file(path, option: str = "-o/--output", what: str = "a file to write") -> Path:
+    """An output argument refused, before any work, when it is empty (``-o ''``: Path reads
+    it as the working directory)."""
+    if not str(path).strip():
+        raise InputError(None, f"{option} is empty; give {what}")
+    return Path(path)
 
 
 def _axis_or_vector(text: str):

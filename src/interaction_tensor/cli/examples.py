@@ -5,17 +5,15 @@ Registered in :mod:`interaction_tensor.cli.main` through ``register(subparsers)`
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from interaction_tensor import affordances
 from interaction_tensor.cli.common import (
+    _out_path,
     _spacing,
     examples_option,
     objects_dir,
     quiet_option,
     seed_option,
 )
-from interaction_tensor.errors import InputError
 from interaction_tensor.geometry.files import write_json, write_mesh, write_ply_points
 
 
@@ -32,9 +30,7 @@ def cmd_examples_list(args) -> int:
 
 def cmd_examples_build(args) -> int:
 
-    out = Path(args.output)
-    if out.exists() and not out.is_dir():
-        raise InputError(out, "exists and is not a directory")
+    out = _out_path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     objects = objects_dir(args.objects)
     names = examples_option(args.examples) or affordances.example_names()

@@ -23,6 +23,7 @@ from interaction_tensor.cli.common import (  # noqa: F401
     Parser,
     _axis_or_vector,
     _fraction,
+    _out_file,
     _out_path,
     _say,
     _show_progress,
@@ -123,9 +124,9 @@ def real_scene_options(parser) -> None:
     g.add_argument("--depth", help="depth image (single-channel 16-bit PNG)")
     g.add_argument("--intrinsics", help="JSON with width, height, fx, fy, cx, cy "
                                         "[, depth_scale, depth_trunc]")
-    g.add_argument("--depth-scale", type=number(low=0, low_open=True), default=None,
+    g.add_argument("--depth-scale", type=number(low=0, high=1e6, low_open=True), default=None,
                    help="depth units per metre (overrides the JSON; TUM 5000, mm PNG 1000)")
-    g.add_argument("--depth-trunc", type=number(low=0, low_open=True), default=None,
+    g.add_argument("--depth-trunc", type=number(low=0, high=100, low_open=True), default=None,
                    help="ignore depth beyond this many metres (overrides the JSON)")
     g.add_argument("--scan", action="store_true",
                    help="SCENE is a captured point cloud (or scanned mesh): clean and align it")
@@ -162,6 +163,7 @@ def real_scene_options(parser) -> None:
 # --------------------------------------------------------------------------- train
 def cmd_train(args) -> int:
 
+    _out_file(args.output, "-o/--output", "the descriptor file to write (.npz)")
     t0 = time.perf_counter()
     tensor = train(args.query, args.scene_object, args.affordance, acceptance=args.acceptance,
                    normal=args.normal, spacing=args.spacing, query_points=args.query_points,
@@ -331,6 +333,7 @@ def cmd_detect(args) -> int:
 # --------------------------------------------------------------------------- batch
 def cmd_batch(args) -> int:
 
+    _out_path(args.output)
     if args.workers is not None and args.workers < 0:
         raise SettingsError(f"--workers must be 0 (this process) or more, got {args.workers}")
     if args.workers is not None and args.scheduler is not None:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import time
 
-from interaction_tensor.cli.common import number, quiet_option
+from interaction_tensor.cli.common import _out_file, number, quiet_option
 from interaction_tensor.errors import InputError
 from interaction_tensor.outputs import render_outdir, render_tensor, write_viewer
 
@@ -27,6 +27,7 @@ def cmd_view(args) -> int:
 
 def cmd_show(args) -> int:
 
+    _out_file(args.render, "--render", "the PNG file to write")
     t0 = time.perf_counter()
     path = render_tensor(args.descriptor, args.render)
     if not args.quiet:
@@ -36,6 +37,9 @@ def cmd_show(args) -> int:
 
 def cmd_render(args) -> int:
 
+    if args.output is not None:
+        _out_file(args.output, "-o/--output", "the PNG file to write (or leave -o out for "
+                                              "OUTDIR/render.png)")
     t0 = time.perf_counter()
     path = render_outdir(args.outdir, args.output, top_k=args.top_k)
     if not args.quiet:

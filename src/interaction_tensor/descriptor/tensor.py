@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import io as _io
 import json
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,7 +25,7 @@ from interaction_tensor.engine.scoring import (
     score_pairs,
     surface_vectors,
 )
-from interaction_tensor.errors import InputError
+from interaction_tensor.errors import InputError, SettingsError
 from interaction_tensor.geometry.collision import (
     Body,
     part_above,
@@ -32,7 +33,7 @@ from interaction_tensor.geometry.collision import (
     through_section,
 )
 from interaction_tensor.geometry.core import Geometry, validate_geometry
-from interaction_tensor.geometry.files import atomic_path
+from interaction_tensor.geometry.files import atomic_path, output_path
 from interaction_tensor.geometry.sampling import (
     estimate_normals,
     mean_spacing,
@@ -43,7 +44,13 @@ from interaction_tensor.geometry.sampling import (
     winding_numbers,
 )
 from interaction_tensor.geometry.scene import Scene
-from interaction_tensor.settings import MIN_SPACING, DetectSettings, TrainSettings
+from interaction_tensor.settings import (
+    CRITERIA,
+    KEYPOINT_SETS,
+    MIN_SPACING,
+    DetectSettings,
+    TrainSettings,
+)
 
 FORMAT = "interaction-tensor-descriptor"
 FORMAT_VERSION = 3
@@ -120,6 +127,55 @@ def _closed(faces: np.ndarray) -> bool:
                     axis=1)
     _, counts = np.unique(edges, axis=0, return_counts=True)
     return bool(len(counts)) and bool(np.all(counts == 2))
+
+
+#: The keys of a descriptor's calibrated tables (``thresholds``, ``self_scores``):
+#: ``"<criterion>-<keypoint set>"``, every one of them.
+TABLE_KEYS = tuple(f"{c}-{k}" for c in CRITERIA for k in KEYPOINT_SETS)
+
+
+def _in_range(value, low: float, high: float, low_open: bool = False) -> bool:
+    """Whether ``value`` is a real number (not a bool), finite and in [low, high] ((low,
+    high] with ``low_open``); a JSON integer too large for a float is not."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        return False
+    try:
+        v = float(value)
+    except (OverflowError, ValueError):
+        return False
+    return math.isfinite(v) and (v > low if low_open else v >= low) and v <= high
+
+
+def _short(value, limit: int = 60, quote: bool = True) -> str:
+    """``repr(value)`` (or the text itself, without ``quote``) cut to ``limit`` characters:
+    a value from a file, shown on one line however long it is."""
+    try:
+        text = repr(value) if quote else str(value)
+    except ValueError:                              # an integer with too many digits
+        text = f"<{type(value).__name__}>"
+    text = text.encode("unicode_escape").decode("ascii") if not text.isprintable() else text
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def _not_plain(value, where: str, depth: int = 0):
+    """The path (``meta.a[2]``) of the first part of ``value`` that is not plain JSON (a
+    text, a finite number, true/false, null, or lists and tables of them, 32 levels deep at
+    most), or None."""
+    if value is None or isinstance(value, (str, bool, int)):
+        return None
+    if isinstance(value, float):
+        return None if math.isfinite(value) else where
+    if depth >= 32 or not isinstance(value, (list, dict)):
+        return where
+    items = value.items() if isinstance(value, dict) else enumerate(value)
+    for key, item in items:
+        if isinstance(value, dict) and not isinstance(key, str):
+            return where
+        found = _not_plain(item, f"{where}.{str(key)[:40]}"
+                           if isinstance(value, dict) else f"{where}[{key}]", depth + 1)
+        if found is not None:
+            return found
+    return None
 
 
 @dataclass
@@ -242,8 +298,16 @@ class InteractionTensor:
         return getattr(self, which)
 
     def threshold(self, criterion: str = "paper", which: str = "weighted") -> float:
-        """Default acceptance threshold for a criterion and keypoint set."""
-        return float(self.thresholds[f"{criterion}-{which}"])
+        """Default acceptance threshold for a criterion and keypoint set. A descriptor built
+        without one (or with one outside (0, 1]) raises :class:`SettingsError`."""
+        key = f"{criterion}-{which}"
+        value = self.thresholds.get(key) if isinstance(self.thresholds, dict) else None
+        if not _in_range(value, 0.0, 1.0, low_open=True):
+            have = f"no {key} threshold" if value is None else \
+                f"{_short(value)} as its {key} threshold, not a number in (0, 1]"
+            raise SettingsError(f"descriptor {self.affordance!r} has {have}; give one "
+                                "(threshold=, --threshold) or set one with set_acceptance()")
+        return float(value)
 
     def set_acceptance(self, threshold: float, clearance_limit: float | None = None,
                        interior_limit: float | None = None, contact: tuple | None = None,
@@ -586,7 +650,7 @@ class InteractionTensor:
     # ------------------------------------------------------------------ files
     def save(self, path) -> Path:
         """Write the descriptor as one ``.npz`` (no pickle) with JSON metadata, atomically."""
-        path = Path(path)
+        path = output_path(path, "descriptor file")
         header = {
             "format": FORMAT, "format_version": FORMAT_VERSION, "affordance": self.affordance,
             "radius": self.radius, "scene_spacing": self.scene_spacing, "vectors": self.vectors,
@@ -645,8 +709,9 @@ class InteractionTensor:
             raise InputError(path, "not a descriptor file (no readable header)") from None
         if not isinstance(header, dict) or header.get("format") != FORMAT:
             raise InputError(path, "not an interaction-tensor descriptor")
-        if header.get("format_version") not in READABLE_VERSIONS:
-            raise InputError(path, f"descriptor format version {header.get('format_version')} "
+        version = header.get("format_version")
+        if isinstance(version, bool) or version not in READABLE_VERSIONS:
+            raise InputError(path, f"descriptor format version {version!r} "
                                    "is not supported (this version reads "
                                    f"{', '.join(map(str, READABLE_VERSIONS))})")
         header, arrays = validate_descriptor(path, header, arrays)
@@ -820,17 +885,21 @@ def validate_descriptor(path, header: dict, arrays: dict):
         bad("query_faces", f"index vertices that do not exist (0..{faces.max()} for "
                            f"{len(out['query_vertices'])} vertices)")
 
-    def number(field, low, high, default=None):
+    def number(field, low, high, default=None, low_open=False):
         value = header.get(field, default)
         if isinstance(value, bool) or not isinstance(value, (int, float)):
-            bad(field, f"must be a number, got {value!r}")
-        if not (np.isfinite(value) and low <= value <= high):
-            bad(field, f"must be in [{low:g}, {high:g}], got {value!r}")
+            bad(field, f"must be a number, got {_short(value)}")
+        if not _in_range(value, low, high, low_open):
+            bad(field, f"must be in {'(' if low_open else '['}{low:g}, {high:g}], got "
+                       f"{_short(value)}")
         return float(value)
 
     affordance = header.get("affordance")
     if not isinstance(affordance, str) or not affordance.strip():
-        bad("affordance", f"must be a non-empty name, got {affordance!r}")
+        bad("affordance", f"must be a non-empty name, got {_short(affordance)}")
+    if len(affordance) > 200 or not affordance.isprintable():
+        bad("affordance", f"must be a one-line name of at most 200 characters, got "
+                          f"{_short(affordance)}")
     radius = number("radius", 1e-4, 100.0)
     number("scene_spacing", MIN_SPACING, 1.0)
     number("clearance_limit", 0.0, 1.0, 0.05)
@@ -838,9 +907,9 @@ def validate_descriptor(path, header: dict, arrays: dict):
     number("contact_distance", 1e-4, 10.0, 0.02)
     number("contact_fraction", 0.0, 1.0, 0.25)
     number("contact_angle", 1e-6, 90.0, 90.0)
-    if header.get("contact_groups", "off") not in ("off", "main", "all", "seat"):
-        bad("contact_groups", f"must be 'off', 'main', 'all' or 'seat', got "
-                              f"{header.get('contact_groups')!r}")
+    groups = header.get("contact_groups", "off")
+    if not isinstance(groups, str) or groups not in ("off", "main", "all", "seat"):
+        bad("contact_groups", f"must be 'off', 'main', 'all' or 'seat', got {_short(groups)}")
     ground = header.get("ground")
     if ground is not None:
         number("ground", -1e4, 1e4)
@@ -857,13 +926,16 @@ def validate_descriptor(path, header: dict, arrays: dict):
     if straddle is not None:
         try:
             straddle = straddle_boxes(straddle)
-        except (TypeError, ValueError) as exc:
-            bad("straddle", str(exc))
+        except (TypeError, ValueError, OverflowError) as exc:
+            bad("straddle", _short(str(exc), 200, quote=False))
     if "collision_tests" in header:
+        if not isinstance(header["collision_tests"], list):
+            bad("collision_tests", f"must be a list of (depth, above), got "
+                                   f"{_short(header['collision_tests'])}")
         try:
             tests = collision_tests(header["collision_tests"])
-        except (TypeError, ValueError) as exc:
-            bad("collision_tests", str(exc))
+        except (TypeError, ValueError, OverflowError) as exc:
+            bad("collision_tests", _short(str(exc), 200, quote=False))
     else:       # format 3 files with one test, as collision_depth and collision_above
         depth, above = header.get("collision_depth"), header.get("collision_above")
         if depth is not None:
@@ -873,24 +945,34 @@ def validate_descriptor(path, header: dict, arrays: dict):
         tests = () if depth is None else ((depth, above),)
     through = header.get("through", False)
     if not isinstance(through, bool):
-        bad("through", f"must be true or false, got {through!r}")
+        bad("through", f"must be true or false, got {_short(through)}")
     if len(out["through_section"]) and len(out["through_section"]) < 3:
         bad("through_section", "must be a polygon of at least 3 vertices, or empty")
-    if header.get("vectors") not in ("surface", "points"):
-        bad("vectors", f"must be 'surface' or 'points', got {header.get('vectors')!r}")
-    for table_name in ("thresholds", "self_scores"):
+    vectors = header.get("vectors")
+    if not isinstance(vectors, str) or vectors not in ("surface", "points"):
+        bad("vectors", f"must be 'surface' or 'points', got {_short(vectors)}")
+    # the calibrated tables: every criterion and keypoint set, nothing else
+    for table_name, low_open in (("thresholds", True), ("self_scores", False)):
         table = header.get(table_name)
         if not isinstance(table, dict):
-            bad(table_name, "must be a table of numbers")
-        low_ok = table_name == "self_scores"     # a self score may be 0, a threshold not
-        for key, value in table.items():
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or \
-                    not np.isfinite(value) or not (0 <= value <= 1) or (value == 0 and not low_ok):
-                bad(f"{table_name}.{key}", f"must be a number in {'[0, 1]' if low_ok else '(0, 1]'}"
-                                           f", got {value!r}")
+            bad(table_name, f"must be a table of {', '.join(TABLE_KEYS)}, got {_short(table)}")
+        for key in TABLE_KEYS:
+            if key not in table:
+                bad(f"{table_name}.{key}", "is missing")
+            if not _in_range(table[key], 0.0, 1.0, low_open):
+                bad(f"{table_name}.{key}", f"must be a number in {'(0, 1]' if low_open else '[0, 1]'}"
+                                           f", got {_short(table[key])}")
+        extra = sorted(set(table) - set(TABLE_KEYS))
+        if extra:
+            bad(f"{table_name}.{str(extra[0])[:40]}",
+                f"is not one of {', '.join(TABLE_KEYS)}")
     meta = header.get("meta", {})
     if not isinstance(meta, dict):
-        bad("meta", "must be a table")
+        bad("meta", f"must be a table, got {_short(meta)}")
+    where = _not_plain(meta, "meta")
+    if where is not None:
+        bad(where, "must be plain JSON (text, finite numbers, true/false, null, lists, "
+                   "tables)")
     if np.linalg.norm(out["reference_point"] - out["query_centroid"]) > 10 * radius:
         bad("reference_point", "lies far outside the query object (more than 10 x its radius)")
     header = {**header, "clearance_limit": header.get("clearance_limit", 0.05),

@@ -13,7 +13,7 @@ import numpy as np
 from interaction_tensor.capture.outputs import write_input_frame_outputs
 from interaction_tensor.descriptor.tensor import InteractionTensor
 from interaction_tensor.engine.scoring import PairScores
-from interaction_tensor.geometry.files import atomic_dir
+from interaction_tensor.geometry.files import atomic_dir, output_path
 from interaction_tensor.geometry.scene import Scene
 from interaction_tensor.outputs.export import (
     OUTPUT_NAMES,
@@ -140,7 +140,7 @@ class Detection:
         write them (given the path), inside the same transaction. An existing ``outdir`` must
         be empty or hold an earlier result (and nothing else). Returns ``outdir`` as a Path.
         """
-        outdir = Path(outdir)
+        outdir = output_path(outdir, "output directory")
         t = time.perf_counter()
         report = getattr(self.scene, "report", None)
         also = dict(also or {})

@@ -31,7 +31,8 @@ from interaction_tensor.engine.scoring import (
     ScoreJob,
     score_pairs,
 )
-from interaction_tensor.geometry.scene import Scene
+from interaction_tensor.errors import InputError
+from interaction_tensor.geometry.scene import MAX_PAIRS, Scene
 from interaction_tensor.placement.checks import (
     FAILS_CLEARANCE,
     FAILS_CONTACT,
@@ -254,6 +255,13 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
         if len(test_idx) and (test_idx[0] < 0 or test_idx[-1] >= len(scene)):
             raise ValueError("test_indices must be indices of the scene's points")
     n_o = settings.n_orientations
+    pairs = len(test_idx) * n_o * len(tensors)
+    if pairs > MAX_PAIRS:            # a scene prepared elsewhere (a frame, a scan, a caller's)
+        many = f" x {len(tensors)} descriptors" if len(tensors) > 1 else ""
+        raise InputError(scene.source, f"{len(test_idx):,} test points x {n_o} orientations"
+                                       f"{many} make {pairs:,} placements to decide, more "
+                                       f"than the {MAX_PAIRS:,} allowed; give a smaller "
+                                       "--sample-fraction or fewer --orientations")
     exit_mode = EXIT_AT_REJECTION if engine.early_exit else EXIT_NEVER
     cands, jobs, pp_list, po_list = [], [], [], []
     for tensor in tensors:

@@ -20,6 +20,14 @@ import numpy as np
 from interaction_tensor.errors import InputError
 
 
+def output_path(path, what: str = "output file") -> Path:
+    """``path`` as a Path; an empty one is refused in one line (``Path("")`` is the working
+    directory, where a result would land unasked or be refused as a directory named '.')."""
+    if path is None or (isinstance(path, str) and not path.strip()):
+        raise InputError(None, f"the {what} path is empty; give one")
+    return Path(path)
+
+
 def make_dirs(directory, target=None) -> None:
     """``mkdir -p directory``; failures (a file in the way, no permission) become one-line
     errors naming ``target`` (default: the directory)."""
@@ -40,7 +48,7 @@ def atomic_path(path):
 
     An interrupted or failed write leaves ``path`` as it was.
     """
-    path = Path(path)
+    path = output_path(path)
     make_dirs(path.parent, path)
     if path.is_dir():
         raise InputError(path, "cannot write: it is a directory")
@@ -73,7 +81,7 @@ def atomic_dir(path, marker: str, allowed=None):
     A lock file beside ``path`` (``.NAME.lock``) makes a second run into the same directory
     refuse while the first is writing; temporaries left by a killed run are removed.
     """
-    path = Path(path)
+    path = output_path(path, "output directory")
     _check_replaceable(path, marker, allowed)
     make_dirs(path.parent, path)
     with _directory_lock(path):
@@ -254,24 +262,27 @@ def write_json(path, obj) -> None:
         fh.write("\n")
 
 
-def write_ply_points(path, points, colors=None, normals=None, **scalars) -> None:
+def write_ply_points(path, points, colors=None, normals=None, exact: bool = False,
+                     **scalars) -> None:
     """Write a binary PLY point cloud, atomically.
 
     Parameters
     ----------
-    points : (N, 3) float, metres
+    points : (N, 3) float, metres; written as 32-bit floats, or with ``exact`` as 64-bit
+        (the coordinates as they are)
     colors : (N, 3) uint8 or None
     normals : (N, 3) float or None
     scalars : name -> (N,) array, written as extra float32 vertex properties
     """
     points = np.asarray(points)
-    fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")]
+    coord = "<f8" if exact else "<f4"
+    fields = [("x", coord), ("y", coord), ("z", coord)]
     if normals is not None:
         fields += [("nx", "<f4"), ("ny", "<f4"), ("nz", "<f4")]
     if colors is not None:
         fields += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
     fields += [(k, "<f4") for k in scalars]
-    kinds = {"<f4": "float", "u1": "uchar"}
+    kinds = {"<f4": "float", "<f8": "double", "u1": "uchar"}
     header = ["ply", "format binary_little_endian 1.0", "comment made by interaction-tensor",
               f"element vertex {len(points)}"]
     header += [f"property {kinds[t]} {n}" for n, t in fields]
@@ -294,15 +305,40 @@ def write_ply_points(path, points, colors=None, normals=None, **scalars) -> None
 
 
 def write_mesh(path, vertices, faces=None, color=None) -> None:
-    """Write a mesh (or, with no faces, a point cloud) as binary PLY, atomically."""
-    import trimesh
-
+    """Write a mesh (or, with no faces, a point cloud) as binary PLY, atomically: exactly
+    the vertices given (64-bit coordinates) and the faces given, in their order, nothing
+    merged, dropped or re-indexed; ``color`` (RGB or RGBA uint8) on every face (every point
+    of a cloud)."""
+    vertices = np.asarray(vertices, np.float64).reshape(-1, 3)
     if faces is None or len(faces) == 0:
         cols = None if color is None else np.tile(np.asarray(color, np.uint8)[:3], (len(vertices), 1))
-        write_ply_points(path, vertices, colors=cols)
+        write_ply_points(path, vertices, colors=cols, exact=True)
         return
-    mesh = trimesh.Trimesh(vertices, faces, process=False)
-    if color is not None:
-        mesh.visual.face_colors = np.asarray(color, dtype=np.uint8)
-    with atomic_path(path) as tmp:
-        tmp.write_bytes(trimesh.exchange.ply.export_ply(mesh, encoding="binary"))
+    faces = np.asarray(faces, np.int64).reshape(-1, 3)
+    if faces.min() < 0 or faces.max() >= len(vertices) or len(vertices) >= 2 ** 31:
+        raise ValueError("faces must index the vertices given (fewer than 2**31)")
+    rgba = None if color is None else np.resize(np.asarray(color, np.uint8), 4)
+    if rgba is not None and len(color) == 3:
+        rgba[3] = 255
+    face_fields = [("n", "u1"), ("v", "<i4", (3,))]
+    if rgba is not None:
+        face_fields += [(c, "u1") for c in ("red", "green", "blue", "alpha")]
+    header = ["ply", "format binary_little_endian 1.0", "comment made by interaction-tensor",
+              f"element vertex {len(vertices)}", "property double x", "property double y",
+              "property double z", f"element face {len(faces)}",
+              "property list uchar int vertex_indices"]
+    if rgba is not None:
+        header += [f"property uchar {c}" for c in ("red", "green", "blue", "alpha")]
+    header.append("end_header")
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        fh.write(("\n".join(header) + "\n").encode("ascii"))
+        fh.write(np.ascontiguousarray(vertices, "<f8").tobytes())
+        for s in range(0, len(faces), 250_000):          # a block at a time: bounded memory
+            block = faces[s:s + 250_000]
+            data = np.empty(len(block), dtype=face_fields)
+            data["n"] = 3
+            data["v"] = block
+            if rgba is not None:
+                for c, value in zip(("red", "green", "blue", "alpha"), rgba):
+                    data[c] = value
+            fh.write(data.tobytes())

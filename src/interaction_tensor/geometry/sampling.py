@@ -42,8 +42,11 @@ def sample_mesh(geometry: Geometry, count: int, seed, face_mask=None):
     return points, normals
 
 
-def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = None) -> np.ndarray:
-    """Unit normals of a point cloud by PCA of the ``k`` nearest neighbours.
+def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = None,
+                     progress: bool = False) -> np.ndarray:
+    """Unit normals of a point cloud by PCA of the ``k`` nearest neighbours, 50,000 points
+    at a time (with ``progress``, a progress bar advanced by each: about 15 s a million
+    points on two cores).
 
     The sign is chosen so that normals point to +Z where they are not horizontal
     (normals of clouds are unoriented; callers that need a side use their own rule).
@@ -55,14 +58,26 @@ def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = Non
     tree = cKDTree(points) if tree is None else tree
     normals = np.empty_like(points)
     step = 50_000  # bounds the (step, k, 3) neighbourhood arrays (about 40 MB)
-    for start in range(0, len(points), step):
-        sl = slice(start, start + step)
-        _, idx = tree.query(points[sl], k=k, workers=-1)
-        nb = points[idx]
-        nb -= nb.mean(axis=1, keepdims=True)
-        cov = np.einsum("nki,nkj->nij", nb, nb)
-        _, vecs = np.linalg.eigh(cov)
-        normals[sl] = vecs[:, :, 0]
+    bar = None
+    if progress and len(points) > step:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(points), unit="pt", unit_scale=True, desc="normals",
+                   leave=False)
+    try:
+        for start in range(0, len(points), step):
+            sl = slice(start, start + step)
+            _, idx = tree.query(points[sl], k=k, workers=-1)
+            nb = points[idx]
+            nb -= nb.mean(axis=1, keepdims=True)
+            cov = np.einsum("nki,nkj->nij", nb, nb)
+            _, vecs = np.linalg.eigh(cov)
+            normals[sl] = vecs[:, :, 0]
+            if bar is not None:
+                bar.update(len(idx))
+    finally:
+        if bar is not None:
+            bar.close()
     flip = normals[:, 2] < 0
     normals[flip] *= -1
     return normals

@@ -113,6 +113,19 @@ class Scene:
 #: Bytes a scene point costs ``detect`` at its defaults, with a margin (benchmarks/memory.py
 #: measures it); a scene needing more than the memory available is refused up front.
 BYTES_PER_POINT = 300
+#: (test point, orientation) pairs per scene point that :data:`BYTES_PER_POINT` covers: the
+#: defaults' 30 % of the points in 8 orientations.
+PAIRS_PER_POINT = 2.4
+#: Bytes each pair beyond those costs, with a margin: the pair arrays, scores, decisions and
+#: placement tests' outcomes (a 500k-point cloud at 100 % in 32 orientations, 16 M pairs, 6 M
+#: of them past the normal filter, took 335 MB more than before detection).
+BYTES_PER_PAIR = 64
+#: Most (test point, orientation) pairs one detection decides: 4 x a 5 M-point scene's at
+#: the defaults. More is refused before any work (lower the sample fraction or the
+#: orientations).
+MAX_PAIRS = 50_000_000
+#: Most samples a mesh scene is sampled into (area / spacing^2 more is refused).
+MAX_MESH_SAMPLES = 5_000_000
 
 
 class GroundMap:
@@ -233,17 +246,49 @@ def available_memory() -> int | None:
     return avail
 
 
-def check_memory(n_points: int, source, available: int | None = None) -> None:
+def check_memory(n_points: int, source, available: int | None = None,
+                 pairs_per_point: float | None = None) -> None:
     """Refuse, before any work, a scene of ``n_points`` that would need more memory than is
-    available (:data:`BYTES_PER_POINT` each): one clear line instead of an OOM kill."""
+    available (:data:`BYTES_PER_POINT` each, and :data:`BYTES_PER_PAIR` for each
+    (test point, orientation) pair beyond :data:`PAIRS_PER_POINT` a point when detection's
+    ``pairs_per_point``, sample fraction x orientations, asks for more), or more pairs than
+    :data:`MAX_PAIRS`: one clear line instead of an OOM kill or a run without end."""
 
+    pairs = None if pairs_per_point is None else round(n_points * pairs_per_point)
+    if pairs is not None and pairs > MAX_PAIRS:
+        raise InputError(source, f"{n_points:,} scene points x {pairs_per_point:g} "
+                                 "placements each (sample fraction x orientations) = "
+                                 f"{pairs:,} placements to decide, more than the "
+                                 f"{MAX_PAIRS:,} allowed; give a smaller --sample-fraction "
+                                 "or fewer --orientations")
     available = available_memory() if available is None else available
-    need = int(n_points) * BYTES_PER_POINT
+    extra = 0 if pairs is None else max(0, pairs - int(PAIRS_PER_POINT * n_points))
+    need = int(n_points) * BYTES_PER_POINT + extra * BYTES_PER_PAIR
     if available is not None and need > available:
-        raise InputError(source, f"{n_points:,} scene points need about {need / 2**30:.1f} GB "
-                                 f"and {available / 2**30:.1f} GB is available; sample fewer "
-                                 "(a coarser --spacing for a mesh, --voxel-size with --scan for "
-                                 "a cloud) or use a machine with more memory")
+        work = f" and {pairs:,} test placements" if extra else ""
+        raise InputError(source, f"{n_points:,} scene points{work} need about "
+                                 f"{need / 2**30:.1f} GB and {available / 2**30:.1f} GB is "
+                                 "available; sample fewer (a coarser --spacing for a mesh, "
+                                 "--voxel-size with --scan for a cloud"
+                                 f"{', a smaller --sample-fraction' if extra else ''}) or use a "
+                                 "machine with more memory")
+
+
+def mesh_samples(geometry: Geometry, spacing: float, max_samples: int = MAX_MESH_SAMPLES,
+                 face_mask=None) -> int:
+    """The samples a mesh scene gets at ``spacing`` (m): its area / spacing^2, at least 100.
+    Counted from the area before any sampling; more than ``max_samples`` is refused in one
+    line naming the scene (a wrong scale, or a spacing too fine for its size)."""
+    area = mesh_area(geometry) if face_mask is None else mesh_area(
+        Geometry(geometry.vertices, geometry.faces[face_mask]))
+    implied = area / spacing ** 2
+    if not implied <= max_samples:
+        raise InputError(geometry.source, f"{area:.4g} m^2 of surface at a {spacing:g} m "
+                                          f"spacing means {implied:,.0f} samples, more than "
+                                          f"the {max_samples:,} allowed; give a larger "
+                                          "spacing (--spacing, spacing=), or the right scale "
+                                          "(--scale, scale=) if the file is not in metres")
+    return max(100, round(implied))
 
 
 #: Linux's transparent huge page size and madvise's MADV_HUGEPAGE.
@@ -284,20 +329,21 @@ def spatially_sorted(points: np.ndarray, normals: np.ndarray, spacing: float):
 
 
 def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
-                  max_points: int = 5_000_000, face_mask=None) -> Scene:
+                  max_points: int = MAX_MESH_SAMPLES, face_mask=None, *,
+                  pairs_per_point: float | None = None, progress: bool = False) -> Scene:
     """Turn a mesh or a point cloud into a :class:`Scene`.
 
-    Meshes are sampled area-uniformly at ``spacing`` (m): count = area / spacing^2, at most
-    ``max_points``; the scene keeps the mesh (``Scene.mesh``) for detection's collision
-    test. Point clouds are used as they are; their normals are estimated by PCA when the
-    file had none.
+    Meshes are sampled area-uniformly at ``spacing`` (m): count = area / spacing^2; a mesh
+    whose count exceeds ``max_points`` is refused before sampling (:func:`mesh_samples`).
+    The scene keeps the mesh (``Scene.mesh``) for detection's collision test. Point clouds
+    are used as they are; their normals are estimated by PCA when the file had none (a
+    progress bar with ``progress``). ``pairs_per_point``: detection's sample fraction x
+    orientations, checked with the memory (:func:`check_memory`) before any work.
     """
     validate_geometry(geometry)
     if geometry.is_mesh:
-        area = mesh_area(geometry) if face_mask is None else mesh_area(
-            Geometry(geometry.vertices, geometry.faces[face_mask]))
-        count = int(np.clip(round(area / spacing ** 2), 100, max_points))
-        check_memory(count, geometry.source)
+        count = mesh_samples(geometry, spacing, max_points, face_mask)
+        check_memory(count, geometry.source, pairs_per_point=pairs_per_point)
         points, normals = spatially_sorted(*sample_mesh(geometry, count, seed,
                                                         face_mask=face_mask), spacing)
         return Scene(points, normals, spacing, geometry.source, sampled=True,
@@ -305,11 +351,11 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
                      mesh=(np.asarray(geometry.vertices, np.float64),
                            np.asarray(geometry.faces, np.int64)))
     points = geometry.vertices
-    check_memory(len(points), geometry.source)
+    check_memory(len(points), geometry.source, pairs_per_point=pairs_per_point)
     tree = cKDTree(points)
     normals = geometry.normals
     if normals is None or len(normals) != len(points):
-        normals = estimate_normals(points, tree=tree)
+        normals = estimate_normals(points, tree=tree, progress=progress)
     else:
         length = np.linalg.norm(normals, axis=1, keepdims=True)
         normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)

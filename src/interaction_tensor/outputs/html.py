@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from interaction_tensor.descriptor.tensor import InteractionTensor
-from interaction_tensor.geometry.files import atomic_path
+from interaction_tensor.geometry.files import atomic_path, output_path
 from interaction_tensor.geometry.sampling import mean_spacing
 from interaction_tensor.outputs.export import colormap
 from interaction_tensor.outputs.render import load_outdir
@@ -201,6 +201,7 @@ def write_viewer(outdir, max_points: int = MAX_POINTS, out_html=None, seed: int 
     """
 
     outdir = Path(outdir)
+    out = outdir / "index.html" if out_html is None else output_path(out_html, "page (HTML)")
     data = build_data(outdir, max_points, seed)
     script = resources.files("interaction_tensor.outputs").joinpath("static/viewer.js").read_text()
     payload = json.dumps(data, separators=(",", ":")).replace("</", "<\\/")
@@ -243,7 +244,6 @@ def write_viewer(outdir, max_points: int = MAX_POINTS, out_html=None, seed: int 
 <script>{script}</script>
 </body></html>
 """
-    out = Path(out_html) if out_html else outdir / "index.html"
     with atomic_path(out) as tmp:
         tmp.write_text(doc, encoding="utf-8")
     return out

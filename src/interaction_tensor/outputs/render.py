@@ -15,7 +15,7 @@ import numpy as np
 from interaction_tensor.descriptor.tensor import InteractionTensor
 from interaction_tensor.errors import InputError
 from interaction_tensor.geometry.core import Geometry
-from interaction_tensor.geometry.files import atomic_path
+from interaction_tensor.geometry.files import atomic_path, output_path
 from interaction_tensor.geometry.load import load_geometry
 from interaction_tensor.geometry.readers import read_ply
 from interaction_tensor.geometry.sampling import (
@@ -238,8 +238,9 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
     object is drawn at each of the ``top_k`` predictions and labelled with its rank.
     """
     t0 = time.perf_counter()
+    out_png = None if out_png is None else output_path(out_png, "picture (PNG)")
     od = load_outdir(outdir, top_k)
-    out_png = Path(out_png) if out_png else od.path / "render.png"
+    out_png = out_png or od.path / "render.png"
     pts, score = od.points, od.score
     colors = colormap(score, vmin=od.threshold, vmax=1.0)
 
@@ -330,6 +331,7 @@ def render_tensor(descriptor, out_png, supersample: int = 2) -> Path:
     ``descriptor``: an InteractionTensor or the path of its ``.npz``.
     """
 
+    out_png = output_path(out_png, "picture (PNG)")
     tensor = descriptor if isinstance(descriptor, InteractionTensor) \
         else InteractionTensor.load(descriptor)
     centre = np.asarray(tensor.query_centroid, float)
