@@ -218,3 +218,41 @@ def test_the_auto_cache_has_a_floor_whatever_the_scene_size(monkeypatch):
     assert backends.cache_budget(10**8, True) == kernels.CACHE_BYTES
     assert backends.CACHE_AUTO_BYTES_PER_POINT * 10**8 > kernels.CACHE_BYTES >= \
         backends.CACHE_AUTO_FLOOR
+
+
+def test_the_cache_kernels_compile_aside_the_first_time_only(monkeypatch):
+    """Where Numba's cache lacks the neighbour cache's kernels, one process compiles them
+    while detection runs its placement tests, and the scoring waits for it; where they are
+    compiled, or inside that process, nothing is started."""
+    started = []
+
+    class FakeProcess:
+        def __init__(self, cmd, **kwargs):
+            started.append((cmd, kwargs["env"]))
+            self.waited = False
+
+        def wait(self):
+            self.waited = True
+
+    monkeypatch.setattr(backends.subprocess, "Popen", FakeProcess)
+    monkeypatch.setattr(backends, "_PREFETCH", None)
+    monkeypatch.setattr(backends, "cache_kernels_ready", lambda: True)
+    backends.prefetch_cache_kernels()
+    assert started == []
+    monkeypatch.setattr(backends, "cache_kernels_ready", lambda: False)
+    monkeypatch.setenv(backends.PREFETCHING, "1")
+    backends.prefetch_cache_kernels()
+    assert started == []
+    monkeypatch.delenv(backends.PREFETCHING)
+    backends.prefetch_cache_kernels()
+    backends.prefetch_cache_kernels()                 # one process, however often asked
+    assert len(started) == 1 and "compile_cache_kernels" in started[0][0][-1]
+    assert started[0][1][backends.PREFETCHING] == "1"
+    process = backends._PREFETCH
+    backends.await_cache_kernels()
+    assert process.waited and backends._PREFETCH is None
+
+
+def test_compiling_the_cache_kernels_scores_through_the_cache():
+    backends.compile_cache_kernels()                  # compiled already: runs in a moment
+    assert backends.cache_kernels_ready()

@@ -130,13 +130,15 @@ def shuffled_ids(poses, seed: int = 0) -> list:
 
 def _views(scene_samples, query_samples, pose) -> np.ndarray:
     """(H, 2W, 3) uint8: the pose from the side that sees most of the object, and from a
-    quarter turn around and higher up."""
+    quarter turn around and higher up; nothing of the scene is cut away, so that what the
+    scene hides (a body through a floor, an object inside a cabinet) stays hidden, as to
+    anyone looking at the place."""
     sp, sn = scene_samples
     qp, qn = query_samples
-    first = closeup(sp, sn, qp, qn, pose, NEUTRAL)
+    first = closeup(sp, sn, qp, qn, pose, NEUTRAL, see_through=False)
     # the second view: every azimuth a quarter turn from the first's candidates, from above
     second = closeup(sp, sn, qp, qn, pose, NEUTRAL, azimuths=(120, 210, 300, 30),
-                     elevation=55.0)
+                     elevation=55.0, see_through=False)
     return np.concatenate([first, second], axis=1)
 
 

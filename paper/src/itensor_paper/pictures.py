@@ -42,11 +42,13 @@ def _samples(geometry, spacing: float, seed: int = 0, limit: int = 2_500_000):
 def closeup(scene_points, scene_normals, query_points, query_normals, pose, colour,
             margin: float | None = None, size=PANEL, azimuths=(210, 300, 30, 120),
             elevation: float = 22.0, spacing: float = 0.01, cut: float = 0.05,
-            touch: float = 0.03) -> np.ndarray:
+            touch: float = 0.03, see_through: bool = True) -> np.ndarray:
     """(H, W, 3) uint8: the posed query object and the scene within ``margin`` (m; default
     the object's size, at least 0.3 m, and 0.4 m above it: a tap over a mug) of it, from
-    the side that sees most of it; the scene points that would still hide it (a cabinet
-    door, a panel more than ``touch`` m in front of it) are left out."""
+    the side that sees most of it. With ``see_through``, the scene points that would still
+    hide it (a cabinet door, a panel more than ``touch`` m in front of it) are left out;
+    without, the scene hides what it hides (a body sunk into a floor shows no legs), as a
+    person looking at the place would see it."""
 
     rot, t = pose[:3, :3], pose[:3, 3]
     q = query_points @ rot.T + t
@@ -78,12 +80,13 @@ def closeup(scene_points, scene_normals, query_points, query_normals, pose, colo
 
     # the whole scene when some view shows at least half of the object, else the cut-away
     best_az, frac = best_view(False)
-    cut_away = frac < 0.5
+    cut_away = see_through and frac < 0.5
     if cut_away:
         best_az, _ = best_view(True)
     cam = camera(best_az, *size, cut_away)
     qs = max(float(np.sqrt(np.ptp(q, axis=0).prod() ** (2 / 3) / max(len(q), 1)) * 1.6), 0.004)
-    front = _in_front(cam, sp, q, qs, touch)
+    front = (_in_front(cam, sp, q, qs, touch) if see_through
+             else np.zeros(len(sp), bool))
     cv = Canvas(cam, supersample=2)
     cv.points(sp[~front], SCENE, sn[~front], size=spacing * 1.6)
     cv.points(q, colour, qn, size=qs)
