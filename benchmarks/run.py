@@ -268,10 +268,16 @@ def machine() -> str:
 def markdown(res: dict) -> str:
     lines = ["# Benchmark results", "",
              f"Written by `python benchmarks/run.py`{' --protocol' if 'protocol' in res else ''}"
-             f" on {res['machine']}, the machine otherwise idle. Every figure is from that one "
-             "run; ratios compare two measurements made in it. Rates count candidates (test "
-             "points past the normal filter, every orientation decided by the placement "
-             "tests and the score) over the seconds of both.", ""]
+             f" on {res['machine']}, the machine otherwise idle. Ratios compare two "
+             "measurements made in the same run. Rates count candidates (test points past the "
+             "normal filter, every orientation decided by the placement tests and the score) "
+             "over the seconds of both.", ""]
+    if len(set(res.get("runs", {}).values())) > 1:
+        groups: dict = {}
+        for case, r in res["runs"].items():
+            groups.setdefault(r, []).append(case)
+        lines += ["Measured in separate runs (`--only`): " + "; ".join(
+            ", ".join(v) for _, v in sorted(groups.items())) + ".", ""]
     if "detect" in res:
         lines += ["## Detection at the defaults (30 % test points)", "",
                   "| case | scene points | candidates | seconds | placement tests / scoring s "
@@ -325,8 +331,15 @@ def main() -> None:
     if args.one:
         one(args.one)
         return
-    res = {"machine": machine()}
+    # the cases not run now keep their figures of the last run (each case's own run is noted)
+    previous = OUT / "results.json"
+    res = json.loads(previous.read_text()) if previous.exists() and args.only != list(CASES) \
+        else {}
+    res["machine"] = machine()
+    res.setdefault("runs", {c: 1 for c in CASES + ("protocol",) if c in res})
+    run_id = len(set(res["runs"].values())) + 1 if res["runs"] else 1
     for name in args.only:
+        res["runs"][name] = run_id
         t = time.perf_counter()
         if name == "detect":
             res["detect"] = {label: run_case("detect", scene, example, frac)
@@ -338,6 +351,7 @@ def main() -> None:
         print(f"{name}: {time.perf_counter() - t:.0f} s", flush=True)
     if args.protocol:
         res["protocol"] = run_case("protocol")
+        res["runs"]["protocol"] = run_id
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "results.json").write_text(json.dumps(res, indent=1))
     (HERE / "RESULTS.md").write_text(markdown(res))

@@ -59,3 +59,37 @@ def corner_example():
     scene_object = parts_mesh(parts)
     query = parts_mesh([box_part("box", (0.3 - 0.1, 0.3 - 0.05, 0.04), (0.2, 0.1, 0.08))])
     return query, scene_object
+
+
+def bench_bed_room():
+    """A bench 10 cm wide along x (top 0.5 m, x from -1 to 1), a bed 1.6 m wide (top 0.5 m)
+    at x = 3, a partition 10 cm wide (top 2.4 m) along x at y = 1, and a floor."""
+    parts = [box_part("bench", (0.0, 0.0, 0.25), (2.0, 0.10, 0.5)),
+             box_part("bed", (3.0, 0.0, 0.25), (1.0, 1.6, 0.5)),
+             box_part("partition", (0.0, 1.0, 1.2), (2.0, 0.10, 2.4)),
+             box_part("floor", (1.5, 0.0, -0.01), (6.0, 3.0, 0.02))]
+    return it.prepare_scene(parts_mesh(parts), 0.01, seed=0)
+
+
+def stool_counter_room(floor: bool):
+    """A stool (top 0.45 m) and a counter (top 0.9 m, its front edge at x = 0.1), with or
+    without a floor; the lowest thing scanned without one is the furniture's base."""
+    parts = [box_part("stool", (2.0, 0.0, 0.225), (0.4, 0.4, 0.45)),
+             box_part("counter", (-0.2, 0.0, 0.45), (0.6, 1.2, 0.9))]
+    if floor:
+        parts.append(box_part("floor", (0.5, 0.0, -0.01), (4.0, 3.0, 0.02)))
+    return it.prepare_scene(parts_mesh(parts), 0.01, seed=0)
+
+
+class FakeCheck:
+    """A CollisionCheck stand-in: ``free`` answers from a table and records what it was
+    asked."""
+
+    on, exhausted = True, False
+
+    def __init__(self, free):
+        self.table, self.asked = free, []
+
+    def free(self, i):
+        self.asked.append(i)
+        return self.table[i]

@@ -202,20 +202,6 @@ def test_testing_first_changes_only_the_work(bowl, threshold):
             np.testing.assert_array_equal(g, w)
 
 
-class _FakeCheck:
-    """A CollisionCheck stand-in: ``free`` answers from a table and records what it was
-    asked."""
-
-    on, exhausted = True, False
-
-    def __init__(self, free):
-        self.table, self.asked = free, []
-
-    def free(self, i):
-        self.asked.append(i)
-        return self.table[i]
-
-
 @pytest.fixture
 def corner_files(tmp_path):
     """The corner example written as q.ply (the box) and s.ply (floor and walls)."""

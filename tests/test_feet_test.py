@@ -20,6 +20,8 @@ from interaction_tensor.detection.search import Engine, detect
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.placement.checks import feet_gaps, standing_groups
 
+from support import stool_counter_room
+
 #: only the feet test decides
 FEET_ONLY = dict(clearance=False, contact=False, interior=False, ground=False)
 
@@ -84,20 +86,10 @@ def test_the_gap_is_the_drop_to_the_highest_sample_under_each_foot_or_the_ground
         np.testing.assert_allclose(gap, [soles - over_floor, soles - over_step], atol=1e-9)
 
 
-def _room(floor: bool):
-    """A stool (top 0.45 m) and a counter (top 0.9 m, its front edge at x = 0.1), with or
-    without a floor; the lowest thing scanned without one is the furniture's base."""
-    parts = [box_part("stool", (2.0, 0.0, 0.225), (0.4, 0.4, 0.45)),
-             box_part("counter", (-0.2, 0.0, 0.45), (0.6, 1.2, 0.9))]
-    if floor:
-        parts.append(box_part("floor", (0.5, 0.0, -0.01), (4.0, 3.0, 0.02)))
-    return it.prepare_scene(parts_mesh(parts), 0.01, seed=0)
-
-
 def test_detection_on_the_counter_room_predicts_no_one_on_the_counter(sitting):
     """End to end: every pair the score accepts (a low threshold) on the room with a floor;
     with the feet test no accepted placement has its seat on the counter top."""
-    scene = _room(True)
+    scene = stool_counter_room(True)
     tensor = affordances.build_descriptor("sitting-human")
     tensor.set_acceptance(1e-3)
     on_top = np.flatnonzero(scene.points[:, 2] > 0.89)

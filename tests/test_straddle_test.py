@@ -18,7 +18,6 @@ from hypothesis import strategies as st
 import interaction_tensor as it
 from interaction_tensor import affordances
 from interaction_tensor.errors import InputError
-from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.placement.checks import (
     FAILS_CONTACT,
     FAILS_MOUNT,
@@ -35,7 +34,7 @@ from interaction_tensor.placement.checks import (
     straddle_passes_at,
 )
 
-from support import descriptor_with_header
+from support import bench_bed_room, descriptor_with_header
 
 #: only the straddle test decides
 STRADDLE_ONLY = ("clearance", "contact", "interior", "ground", "feet", "mount")
@@ -48,13 +47,7 @@ def riding():
 
 @pytest.fixture(scope="module")
 def room():
-    """A bench 10 cm wide along x (top 0.5 m, x from -1 to 1), a bed 1.6 m wide (top 0.5 m)
-    at x = 3, a partition 10 cm wide (top 2.4 m) along x at y = 1, and a floor."""
-    parts = [box_part("bench", (0.0, 0.0, 0.25), (2.0, 0.10, 0.5)),
-             box_part("bed", (3.0, 0.0, 0.25), (1.0, 1.6, 0.5)),
-             box_part("partition", (0.0, 1.0, 1.2), (2.0, 0.10, 2.4)),
-             box_part("floor", (1.5, 0.0, -0.01), (6.0, 3.0, 0.02))]
-    return it.prepare_scene(parts_mesh(parts), 0.01, seed=0)
+    return bench_bed_room()
 
 
 def _in_box_reference(points, rot, at, box):

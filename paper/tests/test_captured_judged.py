@@ -1,9 +1,5 @@
-"""Real scenes: RGB-D frames and scans, cleaning and gravity alignment.
-
-The TUM desk frame is read from ../shared/data/rgbd/tum_desk (or $ITENSOR_SHARED_DATA);
-those tests are skipped when it is absent. Everything runs at 2 cm so that the file takes
-well under two minutes on 2 cores.
-"""
+"""The judge on a captured frame: the seated person detection finds on the TUM desk frame's
+chair is a valid seat on the frame's own triangles."""
 
 from __future__ import annotations
 

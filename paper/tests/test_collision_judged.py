@@ -1,13 +1,6 @@
-"""Detection's collision test of ranked placements (``DetectSettings.collision``).
-
-The sampled placement tests can miss a thin panel or a table top through the query object;
-the collision test poses what would enter the top k and tests its triangles against the
-scene's, and for hanging asks the scene to cross the hook's opening (the through test). These
-tests check that it rejects a hanger through a desk top and keeps one hanging on its rail,
-that a hook with nothing through it fails, that the suppression it plugs into picks what
-suppression over the accepted placements alone would pick, and that the descriptor keeps its
-setting.
-"""
+"""The collision test of ranked placements against the judge: the tuned examples carry the
+collision tests chosen on the labelled set, the tuning's top ranks untested placements as the
+evaluation does, and a seated person's knees through a seat's front edge are rejected."""
 
 from __future__ import annotations
 

@@ -1,12 +1,5 @@
-"""Detection's straddle and mount tests (riding: ``DetectSettings.straddle`` and ``.mount``,
-the descriptor's ``straddle`` and ``mount_height``).
-
-A rider needs the support to go on between the legs ahead of the seat and room for a leg on
-each side, and a seat within reach from the ground. These tests check the box test (the
-samples in boxes fixed to the rider) against a brute-force reference, the rider it must keep
-(astride a narrow bench, facing along it) and the ones it must reject (across the bench, on
-a bed's wide top, on a tall partition's top), the riding acceptance it ships with, and the settings' file round trip.
-"""
+"""The straddle test against the judge: a rider astride a bench passes, across it or on a bed
+does not."""
 
 from __future__ import annotations
 
@@ -15,7 +8,6 @@ import pytest
 
 import interaction_tensor as it
 from interaction_tensor import affordances
-from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.placement.checks import (
     FAILS_STRADDLE,
     PLACED,
@@ -23,6 +15,8 @@ from interaction_tensor.placement.checks import (
     straddle_passes,
     straddle_passes_poses,
 )
+
+from support import bench_bed_room
 
 #: only the straddle test decides
 STRADDLE_ONLY = ("clearance", "contact", "interior", "ground", "feet", "mount")
@@ -35,13 +29,7 @@ def riding():
 
 @pytest.fixture(scope="module")
 def room():
-    """A bench 10 cm wide along x (top 0.5 m, x from -1 to 1), a bed 1.6 m wide (top 0.5 m)
-    at x = 3, a partition 10 cm wide (top 2.4 m) along x at y = 1, and a floor."""
-    parts = [box_part("bench", (0.0, 0.0, 0.25), (2.0, 0.10, 0.5)),
-             box_part("bed", (3.0, 0.0, 0.25), (1.0, 1.6, 0.5)),
-             box_part("partition", (0.0, 1.0, 1.2), (2.0, 0.10, 2.4)),
-             box_part("floor", (1.5, 0.0, -0.01), (6.0, 3.0, 0.02))]
-    return it.prepare_scene(parts_mesh(parts), 0.01, seed=0)
+    return bench_bed_room()
 
 
 def test_a_rider_astride_a_bench_passes_and_across_it_or_on_a_bed_does_not(riding, room):

@@ -1,14 +1,4 @@
-"""Detection's sampled through test (hanging: ``DetectSettings.through``, the descriptor's
-``through`` and ``through_section``).
-
-Every pair the score accepts asks whether scene samples cross the posed opening of the hook
-(where the example's rail went through it); the exact test on the scene's triangles
-(``CollisionCheck``) asks the same of the pairs it ranks. These tests check the grid search
-against the cKDTree reference, the hooks it must keep (on a rail, on a thin desk top's edge:
-that one is the collision test's to reject) and reject (beside the rail, above it, off its
-end, on a cabinet's top), that it keeps every valid hang of the labelled set's validation
-rooms, and what detection does with it on and off.
-"""
+"""The sampled through test keeps every valid hang of the judge's labelled set."""
 
 from __future__ import annotations
 

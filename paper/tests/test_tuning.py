@@ -1,4 +1,5 @@
-"""The clearance test, exact best/worst ranking of pairs, and the tuning's choice of S_aff."""
+"""The tuning of each affordance's acceptance on the validation rooms: the threshold of best F1,
+the ranking the evaluation uses, and placement tests whose top 5 the judge finds valid."""
 
 from __future__ import annotations
 
@@ -23,6 +24,8 @@ from itensor_paper.tuning import (
     table_top,
     write,
 )
+
+from support import FakeCheck
 
 
 def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
@@ -94,20 +97,6 @@ def test_tuning_chooses_the_threshold_of_best_f1(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["tuning"]
 
 
-class _FakeCheck:
-    """A CollisionCheck stand-in: ``free`` answers from a table and records what it was
-    asked."""
-
-    on, exhausted = True, False
-
-    def __init__(self, free):
-        self.table, self.asked = free, []
-
-    def free(self, i):
-        self.asked.append(i)
-        return self.table[i]
-
-
 def _table_top_reference(pos, score, placed, free, k, radius):
     """Brute force: placed pairs that pass the collision test best first, picked when no
     pick is within ``radius``; then the other pairs that do not cross the scene, with them
@@ -138,7 +127,7 @@ def test_the_tunings_top_is_the_evaluations_ranking(seed, k):
     placed = rng.uniform(size=n) < 0.4
     # True passes, False crosses the scene, None: not tested (the tests are spent)
     free = [(True, False, None)[c] for c in rng.choice(3, n, p=[0.6, 0.25, 0.15])]
-    got = table_top(pos, score, placed, k, 0.3, _FakeCheck(free)).tolist()
+    got = table_top(pos, score, placed, k, 0.3, FakeCheck(free)).tolist()
     assert got == _table_top_reference(pos, score, placed, free, k, 0.3)
     # the threshold plays no part: only the placement tests and the collision test
     assert table_top(pos, score, placed, k, 0.3).tolist() == _table_top_reference(

@@ -102,13 +102,21 @@ def cmd_evaluate_rejudge(args) -> int:
 def cmd_panel_sheets(args) -> int:
     import csv
 
-    with open(Path(args.run) / "judgements.csv", newline="") as fh:
-        rows = list(csv.DictReader(fh))
-    held = sorted({r["scene"] for r in rows} - set(panel.DEVELOPMENT_SCENES))
-    dev = panel.select(rows, args.development, args.seed, scenes=panel.DEVELOPMENT_SCENES)
-    hold = panel.select(rows, args.per_affordance, args.seed + 1, scenes=held,
-                        first_id=len(dev) + 1)
-    poses = panel.shuffled_ids(dev + hold, args.seed + 2)
+    source = Path(args.run)
+    if source.suffix == ".csv":             # a panel's own poses (its key, or panel.csv)
+        poses = panel.load(source)
+    else:
+        path = source / "judgements.csv"
+        if not path.is_file():
+            raise InputError(source, "not an evaluation output (no judgements.csv) nor a "
+                                     "panel's CSV")
+        with open(path, newline="") as fh:
+            rows = list(csv.DictReader(fh))
+        held = sorted({r["scene"] for r in rows} - set(panel.DEVELOPMENT_SCENES))
+        dev = panel.select(rows, args.development, args.seed, scenes=panel.DEVELOPMENT_SCENES)
+        hold = panel.select(rows, args.per_affordance, args.seed + 1, scenes=held,
+                            first_id=len(dev) + 1)
+        poses = panel.shuffled_ids(dev + hold, args.seed + 2)
     panel.draw(poses, args.scenes, objects_dir(args.objects), args.output)
     if not args.quiet:
         print(f"wrote {len(poses)} poses' rating sheets and key.csv into {args.output}")
@@ -229,7 +237,8 @@ def register(sub) -> None:
     p = sub.add_parser("panel-sheets",
                        help="draw rating sheets for a blind panel from an evaluation's judged "
                             "poses (two views each, one colour, ids only) and their key")
-    p.add_argument("run", help="output directory of an evaluation (its judgements.csv)")
+    p.add_argument("run", help="output directory of an evaluation (its judgements.csv), or a "
+                               "panel's CSV (its key, or data/panel.csv) to draw its poses again")
     p.add_argument("-o", "--output", required=True, help="folder of the sheets and the key")
     p.add_argument("--scenes", required=True, help="directory of the run's scene files")
     p.add_argument("--objects", default=None, help="directory of real query objects")
