@@ -177,9 +177,11 @@ def test_a_hanger_flat_against_a_wall_has_nothing_through_its_hook():
     flat = _shift(0.0, 0.0, 1.2 - ex.support_point[2])
     v = judge.judge(scene, flat)
     assert not v.valid and v.loop is False and v.reasons == ["nothing passes through the hook"]
-    # without the rule (any sample counts) the judge passed it
+    # without the rule (any sample counts) the wall passes through the hook, but it goes on
+    # sideways through the hook's wire: it does not fit in the hook
     lenient = Judge.for_example(ex, JudgeSettings(loop_min_angle=0.0))
-    assert lenient.judge(scene, flat).valid
+    v = lenient.judge(scene, flat)
+    assert v.loop and v.reasons == ["what it hangs from goes on sideways out of the hook"]
     # and the rail through the hook still passes
     assert judge.judge(JudgeScene(ex.scene_object), np.eye(4)).valid
 
@@ -288,3 +290,31 @@ def test_a_tap_with_no_sink_under_it_is_not_a_filling_place():
                   box_part(f"front wall {s}", (cx, oy - 0.22, top - 0.08), (0.30, 0.02, 0.18))]
     assert judge._sink(JudgeScene(parts_mesh(parts + spout)), judge.opening, bottom) >= \
         judge.settings.sink_sectors
+
+
+def test_a_bag_hooked_over_a_board_does_not_fit_and_one_on_its_rail_does():
+    """A strap round a rail hangs; a shelf board under the strap's top goes on sideways
+    through the strap, which cannot be put round it."""
+    ex = affordances.build("hanging-handbag")
+    judge = Judge.for_example(ex)
+    rail = judge.judge(JudgeScene(ex.scene_object), np.eye(4))
+    assert rail.valid and rail.fits and rail.free
+    top = ex.loop[0][2] + ex.loop[1]                     # the strap's inner top
+    board = box_part("shelf", (0.3, 0.0, top - 0.01), (0.64, 1.0, 0.02))
+    wall = box_part("wall", (0.63, 0.0, 1.0), (0.02, 1.0, 2.0))
+    v = judge.judge(JudgeScene(parts_mesh([board, wall])), np.eye(4))
+    assert v.loop and v.fits is False and not v.valid
+    assert "what it hangs from goes on sideways out of the hook" in v.reasons
+
+
+def test_a_hanger_resting_its_bottom_on_a_top_is_not_hanging_free():
+    ex = affordances.build("hanging-hanger")
+    judge = Judge.for_example(ex)
+    low = float(judge.samples[:, 2].min())
+    rail = parts_mesh([box_part("rail", (0.0, 0.0, ex.loop[0][2]), (0.02, 1.0, 0.02))])
+    free = judge.judge(JudgeScene(rail), np.eye(4))
+    assert free.free
+    under = parts_mesh([box_part("rail", (0.0, 0.0, ex.loop[0][2]), (0.02, 1.0, 0.02)),
+                        box_part("box", (0.0, 0.0, low - 0.105), (0.6, 0.3, 0.2))])
+    v = judge.judge(JudgeScene(under), np.eye(4))
+    assert v.free is False and "rests on a surface below instead of hanging free" in v.reasons

@@ -218,10 +218,11 @@ def test_feet_on_a_step_high_above_the_floor_are_no_seat_and_a_foot_rest_is(pose
 
 
 def test_a_rider_on_a_tall_partition_is_out_of_reach_and_one_on_a_low_wall_rides(poses):
-    """The judge traps' walls: astride a 0.9 m wall's top is pretend riding (valid); astride
-    a 1.4, 1.6 or 2.4 m partition's top the rider passes every other test (the partition goes on
-    between the legs, the legs have room, the seat touches) and is out of reach from the
-    floor (the published kitchens' top riders straddled their 2.4-2.7 m walls)."""
+    """The judge traps' walls: astride a 0.9 m wall's or a 0.7 m panel's top is pretend
+    riding (valid); astride a 1.4, 1.6 or 2.4 m partition's top the rider passes every other
+    test (the partition goes on between the legs, the legs have room, the seat touches) and
+    is out of reach from the floor (the published kitchens' top riders straddled their
+    2.4-2.7 m walls)."""
 
     walls = [p for p in poses if p.affordance == "riding" and "wall" in p.case
              or "partition" in p.case]
@@ -229,13 +230,14 @@ def test_a_rider_on_a_tall_partition_is_out_of_reach_and_one_on_a_low_wall_rides
     ex = affordances.build("riding-human", _objects())
     scene = JudgeScene(validation.build_scene("judge_traps").geometry)
     judge = Judge.for_example(ex)
-    lenient = Judge.for_example(ex, JudgeSettings(seat_above_ground=100.0))
+    lenient = Judge.for_example(ex, JudgeSettings(seat_above_ground=100.0,
+                                                  rider_feet_reach=100.0))
     for p in walls:
         v = judge.judge(scene, np.asarray(p.pose))
         assert v.valid == p.valid, (p.case, v.reasons)
         assert v.astride and v.legroom and v.contact > 0.1
         if p.valid:
-            assert 0.85 <= v.seat_height <= 1.0
+            assert 0.65 <= v.seat_height <= 1.0
         else:
             assert len(v.reasons) == 1 and v.reasons[0].endswith("out of reach to ride")
             assert v.seat_height > 1.4 > judge.settings.seat_above_ground

@@ -76,9 +76,55 @@ def test_sheets_show_ids_and_no_verdict(tmp_path):
     img = np.asarray(Image.open(tmp_path / "sheets" / "placing" / "sheet_01.png").convert("RGB"))
     hue = img.astype(int) - panel.NEUTRAL
     drawn = (img[..., 0] > img[..., 2] + 40) & (np.abs(hue).sum(axis=2) < 200)
-    assert drawn.sum() > 200                      # the object, in the one colour, both views
-    assert drawn[:, img.shape[1] // 2:].sum() > 50
+    assert drawn.sum() > 200                      # the object, in the one colour, every view
+    views, cuts = drawn[:panel.VIEW[1]], drawn[panel.VIEW[1] + 4:]
+    for k in range(3):
+        assert views[:, 90 + k * panel.VIEW[0]:90 + (k + 1) * panel.VIEW[0]].sum() > 20
+    for k in range(2):                            # its outline in both cuts
+        assert cuts[:, 90 + k * panel.CUT[0]:90 + (k + 1) * panel.CUT[0]].sum() > 20
     question = (tmp_path / "sheets" / "placing" / "question.txt").read_text()
     assert question.startswith("Could this object be put down here")
     assert not any(w in question for w in ("Naive", "iT", "score", "valid"))
     assert (tmp_path / "sheets" / "key.csv").read_text().count("\n") == 2
+
+
+def test_agreement_rows_split_development_and_held_out_and_count_raters():
+    pose = np.eye(4)
+    poses = [panel.PanelPose("Q0001", "placing", "placing-bowl", "kitchen3", "Naive", "top", 1,
+                             pose, False, ["yes", "yes", "no"]),
+             panel.PanelPose("Q0002", "placing", "placing-bowl", "kitchen1", "Naive", "top", 2,
+                             pose, True, ["no", "no", "no"]),
+             panel.PanelPose("Q0003", "placing", "placing-bowl", "kitchen1", "Naive", "top", 3,
+                             pose, True, ["yes", "yes", "yes"])]
+    assert panel.rater_agreement(poses) == round(100 * 7 / 9, 1)
+    rows = panel.agreement_rows(poses, {"Q0001": True, "Q0002": True, "Q0003": True})
+    dev = next(r for r in rows if r["affordance"] == "placing" and r["split"] == "development")
+    held = next(r for r in rows if r["affordance"] == "placing" and r["split"] == "held-out")
+    assert (dev["poses"], dev["agree"], dev["agreement"]) == (1, 1, 100.0)
+    assert (held["poses"], held["agree"], held["agreement"]) == (2, 1, 50.0)
+    assert (held["panel_valid"], held["judge_valid"], held["raters_agree"]) == (1, 2, 100.0)
+    table = panel.agreement_markdown(rows)
+    assert "| placing | 1/2 (50.0 %) | 1/1 (100.0 %) | 1 / 2 | 100.0 % |" in table
+
+
+def test_panel_agreement_writes_the_judges_agreement(tmp_path, capsys):
+    from interaction_tensor.cli.main import main
+
+    objects = shared_file("objects/paper_bowl.ply").parent
+    scenes = shared_file("scenes/office-desk1.ply").parent
+    floating = np.eye(4)
+    floating[:3, 3] = (0.5, 0.3, 3.0)                    # a bowl in the air: invalid
+    poses = [panel.PanelPose("Q0001", "placing", "placing-bowl", "office-desk1", "Naive", "top",
+                             1, floating, True, ["no", "no", "yes"]),
+             panel.PanelPose("Q0002", "placing", "placing-bowl", "office-desk1", "Naive", "top",
+                             2, floating, True, ["yes", "yes", "no"])]
+    panel.save(poses, tmp_path / "panel.csv")
+    assert main(["paper", "panel-agreement", "--scenes", str(scenes), "--objects", str(objects),
+                 "--panel", str(tmp_path / "panel.csv"), "-o", str(tmp_path / "out")]) == 0
+    assert "| placing | 1/2 (50.0 %) |" in capsys.readouterr().out
+    import csv
+
+    with open(tmp_path / "out" / "panel_agreement.csv", newline="") as fh:
+        rows = {(r["affordance"], r["split"]): r for r in csv.DictReader(fh)}
+    held = rows[("placing", "held-out")]
+    assert (held["poses"], held["agree"], held["judge_valid"]) == ("2", "1", "0")

@@ -25,6 +25,7 @@ from itensor_paper.merge import merge, rejudge
 from itensor_paper.report import judge_markdown, table_markdown
 from itensor_paper.runner import METHODS, EvalSettings, evaluate
 from itensor_paper import panel
+from itensor_paper.common import write_csv
 from itensor_paper.summary import write_summary
 from itensor_paper.tuning import TuneSettings, tune, write
 
@@ -103,8 +104,12 @@ def cmd_panel_sheets(args) -> int:
     import csv
 
     source = Path(args.run)
-    if source.suffix == ".csv":             # a panel's own poses (its key, or panel.csv)
-        poses = panel.load(source)
+    if source.suffix == ".csv":             # a panel's own poses (its key, or panel.csv),
+        poses = panel.load(source)          # for a new round of raters
+        if args.affordance:
+            poses = [p for p in poses if p.affordance in args.affordance]
+        for p in poses:
+            p.answers = []
     else:
         path = source / "judgements.csv"
         if not path.is_file():
@@ -129,6 +134,19 @@ def cmd_panel_verdicts(args) -> int:
     if not args.quiet:
         decided = sum(p.majority is not None for p in poses)
         print(f"wrote {args.output}: {len(poses)} poses, {decided} with a majority")
+    return 0
+
+
+def cmd_panel_agreement(args) -> int:
+    poses = panel.load(args.panel)
+    judged = panel.judge_poses(poses, args.scenes, objects_dir(args.objects),
+                               None if args.quiet else print)
+    rows = panel.agreement_rows(poses, judged)
+    out = Path(args.output)
+    out.mkdir(parents=True, exist_ok=True)
+    write_csv(out / "panel_agreement.csv", rows, panel.AGREEMENT_COLUMNS)
+    if not args.quiet:
+        print(panel.agreement_markdown(rows))
     return 0
 
 
@@ -236,9 +254,13 @@ def register(sub) -> None:
 
     p = sub.add_parser("panel-sheets",
                        help="draw rating sheets for a blind panel from an evaluation's judged "
-                            "poses (two views each, one colour, ids only) and their key")
+                            "poses (three views and two cuts each, one colour, ids only) and "
+                            "their key")
     p.add_argument("run", help="output directory of an evaluation (its judgements.csv), or a "
-                               "panel's CSV (its key, or data/panel.csv) to draw its poses again")
+                               "panel's CSV (its key, or data/panel.csv) to draw its poses "
+                               "again for new raters")
+    p.add_argument("--affordance", action="append", default=None,
+                   help="with a panel's CSV: only this affordance's poses (repeatable)")
     p.add_argument("-o", "--output", required=True, help="folder of the sheets and the key")
     p.add_argument("--scenes", required=True, help="directory of the run's scene files")
     p.add_argument("--objects", default=None, help="directory of real query objects")
@@ -250,6 +272,18 @@ def register(sub) -> None:
     seed_option(p)
     quiet_option(p)
     p.set_defaults(func=cmd_panel_sheets)
+
+    p = sub.add_parser("panel-agreement",
+                       help="judge the blind panel's poses and write how often the judge "
+                            "agrees with the panel (panel_agreement.csv)")
+    p.add_argument("--scenes", required=True, help="directory of the panel's scene files")
+    p.add_argument("--objects", default=None, help="directory of real query objects")
+    p.add_argument("--panel", default=str(panel.DATA_FILE),
+                   help="the panel's poses and verdicts (default: the package's)")
+    p.add_argument("-o", "--output", default="paper/results",
+                   help="folder to write panel_agreement.csv into")
+    quiet_option(p)
+    p.set_defaults(func=cmd_panel_agreement)
 
     p = sub.add_parser("panel-verdicts",
                        help="add raters' answers (CSV files of id,yes|no) to a panel's key: "

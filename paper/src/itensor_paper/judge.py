@@ -16,14 +16,13 @@ Tests, by affordance (each affordance's :class:`~interaction_tensor.affordances.
    rods) are seen however thin they are. Containers (mugs, cups, bowls, bottles) are tested
    as their convex hull: something inside the cavity penetrates the interaction as much as
    something inside the wall. Depth is the shortest move (26 directions, a ladder of lengths)
-   that separates the two: at most ``penetration_depth`` = 1 cm (2 cm for a person, whose
-   size and soft seats make a centimetre of sinking normal). A person is rigid only in its
-   core (pelvis, thighs, torso, head): each lower leg (more than 5 cm below the seat) and
-   each arm (more than 8 cm above the seat and 16 cm to the side of the mid-plane, or 20 to
-   50 cm above the seat and 18 cm ahead of it: forearms reaching forward) is tested
-   on its own and may go up to ``limb_penetration`` = 10 cm into the scene, since a real
-   person spreads the knees around a bench, bends them under a low seat and rests the
-   forearms on a table or an armrest.
+   that separates the two: at most ``penetration_depth`` = 1 cm for an object, and 2 cm for
+   every part of a person (``person_penetration_depth``, ``limb_penetration``): no body part
+   more than 2 cm inside the scene, whose geometry knows nothing of cushions. A person's
+   legs and arms are tested each on its own, so that a verdict says which part goes in
+   (each lower leg, more than 5 cm below the seat, and a rider's thighs sloping to the
+   knees; each arm, more than 8 cm above the seat and 16 cm to the side of the mid-plane, or
+   20 to 50 cm above the seat and 18 cm ahead of it).
 2. **Main contact** (all). The example's main contact is the query's surface within 1 cm of
    the scene-object near the point the interaction rests on, and not below it (the bowl's foot ring, the mug's
    bottom, the hook's inside top, the thighs and buttocks on the seat, the rider's seat). At
@@ -73,6 +72,17 @@ Tests, by affordance (each affordance's :class:`~interaction_tensor.affordances.
    normal that far from the loop's axis; a rail or an edge through the loop crosses it at
    about 90). Sampled on random wall points of a validation room, 27 of 40 hangers flat in
    the wall passed the triangle test and every other test.
+   **What it hangs from fits in the loop** (``fits``): the scene's surface crossing the
+   loop's plane is split into connected pieces, and each piece that reaches into the loop's
+   opening must end within 1 cm of it wherever the object itself goes on around the opening
+   (the hook's wire, the strap and its bag). A rail, a rod, a peg or a tap's spout lies
+   inside the hook; a shelf board, a desk top or a counter's lip goes on sideways through the
+   wire or the strap, which cannot be put round it, and which the collision test misses
+   where the wire or the strap is thinner than its tolerance. The blind panel rejected
+   hangers and bags hooked over board edges once the sheets showed cuts through the hook.
+   **Hanging free** (``free``): the object's bottom (its lowest 3 cm) does not rest on a top
+   or a floor (5 % of it within 1.5 cm of an up- or down-facing surface): a hanger lying on a
+   chair's star base is not hanging.
 6. **Above the ground** (hanging). The hanging object's lowest point is at most
    ``below_ground`` = 1 cm below the ground: the lowest scene point within 1.5 m. Where the
    scan has a floor, hanging through it is test 1's business; the published office scans
@@ -92,18 +102,23 @@ Tests, by affordance (each affordance's :class:`~interaction_tensor.affordances.
    floor to sit; a bar stool's foot rest, 0.2-0.5 m up, is fine).
 8. **Astride** (riding). The scene's surface goes on between the legs ahead of the seat:
    scene samples in a box 3 cm either side of the body's mid-plane, from 12 to 32 cm ahead of
-   the seat point, from 30 cm below to 2 cm above the seat (a motorbike's tank, a bench or a
-   sofa arm going on between the knees; not a bench crossed sideways). And there is room for
-   a leg on each side: no scene sample 18 to 35 cm either side of the mid-plane, from 10 cm
-   behind to 20 cm ahead of the seat point, from 14 cm below to 2 cm above the seat (a wide
-   seat or a bed fails; a sofa cushion lower than that beside the arm does not). Pretend riding
-   does not need the example's motorbike: the rider's legs are not tested for penetration
-   (they go where the support lets them, as a child's on a sofa arm), its arms as in test 1.
+   the seat point, from 30 cm below to 2 cm above the seat (a motorbike's tank, a panel or a
+   wall's top going on between the knees; not a bench crossed sideways). And there is room
+   for a leg on each side: no scene sample 18 to 35 cm either side of the mid-plane, from 10
+   cm behind to 20 cm ahead of the seat point, from 14 cm below to 2 cm above the seat (a wide
+   seat or a bed fails). Pretend riding does not need the example's motorbike, but the
+   rider's legs are tested as every body part is (test 1): the example rider's legs are 7 cm
+   apart from the seat down, so what it sits astride is at most about 11 cm wide there (a
+   panel, a partition, a chair's back, a beam); the legs of this rider do not spread round a
+   sofa's arm or a bench.
 9. **Within reach from the ground** (riding). The seat (the posed point the example rests
-   on) is at most ``seat_above_ground`` = 1.3 m above the ground (the lowest scene point
-   within 1.5 m): a person climbs astride a bench, a sofa arm, a motorbike or a vaulting
-   horse (1.05-1.35 m), not the top of a 2.4 m wall or partition with the feet dangling a
-   metre and more above the floor.
+   on) is at most ``seat_above_ground`` = 1.2 m above the ground (the lowest scene point
+   within 1.5 m), and the feet reach a floor or a foot rest: under each foot, the highest
+   surface one can stand on (as test 7, at any height: a desk under a partition's top is a
+   foot rest) is at most ``rider_feet_reach`` = 0.65 m below the sole, the example rider's
+   bent legs straightened (its soles are 0.37 m under its seat): a rider straddles a 0.9 m
+   wall or a 1 m chair back on tiptoe, not the top of a 2.4 m wall or partition with the feet
+   dangling a metre and more above the floor.
 
 10. **Upright** (all). The example is posed under gravity: its query object's vertical
    (+Z of the training frame) stays within ``max_tilt`` = 15 degrees of the scene's +Z. A
@@ -121,6 +136,7 @@ value, so that a table can show why a pose failed.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -140,7 +156,7 @@ class JudgeSettings:
     spacing: float = 0.01
     penetration_depth: float = 0.01
     person_penetration_depth: float = 0.02
-    limb_penetration: float = 0.10
+    limb_penetration: float = 0.02
     limb_below_seat: float = 0.05
     arm_above_seat: float = 0.08
     arm_lateral: float = 0.16
@@ -173,6 +189,13 @@ class JudgeSettings:
     sink_sectors: int = 33                     # of 36 (10 degrees each)
     loop_fraction: float = 0.85
     loop_min_angle: float = 30.0
+    fit_ring: tuple = (0.01, 0.01)             # beyond the loop, beyond the object
+    fit_slab: float = 0.015
+    fit_reach: float = 0.30
+    fit_min_samples: int = 2
+    free_band: float = 0.03                    # the object's bottom
+    free_gap: float = 0.015
+    free_fraction: float = 0.05
     below_ground: float = 0.01
     feet_reach: float = 0.25
     stand_angle: float = 45.0
@@ -185,7 +208,8 @@ class JudgeSettings:
     legroom_lateral: tuple = (0.18, 0.35)
     legroom_along: tuple = (-0.10, 0.20)
     legroom_below: tuple = (0.14, 0.02)        # (below, above) the seat
-    seat_above_ground: float = 1.3
+    seat_above_ground: float = 1.2
+    rider_feet_reach: float = 0.65
     max_tilt: float = 15.0                     # degrees
     seed: int = 0
 
@@ -207,6 +231,8 @@ class Verdict:
     basin: int | None = None
     sink: int | None = None
     loop: bool | None = None
+    fits: bool | None = None
+    free: bool | None = None
     feet_gap: float | None = None
     below_ground: float | None = None
     astride: bool | None = None
@@ -221,7 +247,7 @@ class Verdict:
         return {"valid": bool(self.valid), "penetration_m": r(self.penetration),
                 "contact": r(self.contact, 3), "support_margin_m": r(self.support_margin),
                 "overhead": self.overhead, "basin_sectors": self.basin, "sink_sectors": self.sink,
-                "loop": self.loop,
+                "loop": self.loop, "fits": self.fits, "free": self.free,
                 "feet_gap_m": r(self.feet_gap), "below_ground_m": r(self.below_ground),
                 "astride": self.astride, "legroom": self.legroom,
                 "seat_height_m": r(self.seat_height), "tilt_deg": r(self.tilt, 2),
@@ -251,6 +277,13 @@ class JudgeScene:
         self.collider = collision.MeshCollider(geometry.vertices, geometry.faces)
         self.source = getattr(geometry, "source", "<scene>")
         self._ground = GroundMap(self.points)
+
+    @functools.cached_property
+    def flat_tree(self) -> cKDTree:
+        """A KD-tree of the samples on up- or down-facing surfaces (normal within 45 degrees
+        of vertical): tops and floors."""
+        flat = self.points[np.abs(self.normals[:, 2]) >= 0.7]
+        return cKDTree(flat if len(flat) else np.full((1, 3), np.inf))
 
     def ground_level(self, centre, radius: float) -> float:
         """The lowest scene point within ``radius`` (m, horizontally, to 10 cm) of ``centre``."""
@@ -306,6 +339,14 @@ class Judge:
             axis = np.asarray(axis, float)
             self.loop = (np.asarray(centre, float), st.loop_fraction * inner,
                          axis / np.linalg.norm(axis))
+            self.loop_inner = float(inner)
+            self.loop_closed = self._loop_closed()
+            # a strap (closed below by its object) cannot be put round what goes on
+            # sideways; a hook's gap lets an edge in
+            self.loop_is_closed = bool(np.isfinite(self.loop_closed[1:17]).all())
+        # the bottom of what hangs (hanging): its samples within free_band of its lowest
+        self.hanging_part = self.samples[self.samples[:, 2]
+                                         <= self.samples[:, 2].min() + st.free_band]
         s = self.support_point
         # columns (training frame: x-y box, z range) the astride and legroom tests look in
         self.astride_column = ((s[0] + st.astride_ahead[0], s[0] + st.astride_ahead[1]),
@@ -381,8 +422,7 @@ class Judge:
                            ("left arm", arm & left), ("right arm", arm & ~left)):
             if part.any():
                 rest &= ~part
-                if not (name.endswith("leg") and "legroom" in self.tests):
-                    out.append((collision.Body(v, f[part]), st.limb_penetration, name))
+                out.append((collision.Body(v, f[part]), st.limb_penetration, name))
         return [(collision.Body(v, f[rest]), st.person_penetration_depth, "body")] + out
 
     def _loop_crossed(self, scene: JudgeScene, rot, t) -> bool:
@@ -398,6 +438,72 @@ class Judge:
         across = np.abs(scene.normals[near] @ a) <= np.cos(np.radians(
             self.settings.loop_min_angle))
         return bool(np.any(inside & across))
+
+    def _loop_frame(self):
+        """The loop's in-plane frame (training frame): centre, axis, the in-plane up and
+        side directions."""
+        centre, _, axis = self.loop
+        up = np.array([0.0, 0.0, 1.0]) - axis * axis[2]
+        up /= max(np.linalg.norm(up), 1e-9)
+        return centre, axis, up, np.cross(axis, up)
+
+    def _loop_closed(self) -> np.ndarray:
+        """(36,) float: in each direction (10 degrees each, in the loop's plane, from its
+        centre), how far out the object itself goes on (m; inf where it does not within
+        ``fit_reach``): a strap's legs and its bag close the sides and below; a hook's gap
+        and the room over a hanger's shoulders stay open."""
+        st = self.settings
+        centre, axis, up, side = self._loop_frame()
+        d = self.samples - centre
+        h = d @ axis
+        x, z = d @ side, d @ up
+        r = np.hypot(x, z)
+        mine = (np.abs(h) <= st.fit_slab) & (r >= 0.9 * self.loop_inner) & (r <= st.fit_reach)
+        closed = np.full(36, np.inf)
+        np.minimum.at(closed, _bins(x[mine], z[mine]), r[mine])
+        return closed
+
+    def _fits(self, scene: JudgeScene, rot, t) -> bool:
+        """Whether what passes through the loop fits inside it. The scene's surface crossing
+        the loop's plane (samples within a spacing of it) is split into connected pieces;
+        each piece that reaches into the loop's opening must end within ``fit_ring[0]`` of
+        it wherever the object itself goes on around the opening (:meth:`_loop_closed`): a
+        rail, a rod, a peg or a tap's spout lies inside a hook; a shelf board, a desk top
+        or a counter's lip goes on sideways through the hook's wire or the bag's strap,
+        which cannot be put round it (and which the collision test misses where the wire or
+        the strap is thinner than its tolerance)."""
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import connected_components
+
+        st = self.settings
+        centre, axis, up, side = self._loop_frame()
+        c = rot @ centre + t
+        near = np.asarray(scene.tree.query_ball_point(c, st.fit_reach), np.int64)
+        d = (scene.points[near] - c) @ rot            # training frame
+        d = d[np.abs(d @ axis) <= scene.spacing]
+        x, z = d @ side, d @ up
+        r = np.hypot(x, z)
+        inside = r <= self.loop_inner
+        if not inside.any():
+            return True
+        pairs = cKDTree(d).query_pairs(1.5 * scene.spacing, output_type="ndarray")
+        graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
+                           shape=(len(d), len(d)))
+        _, label = connected_components(graph, directed=False)
+        through = np.isin(label, np.unique(label[inside]))
+        reach = self.loop_closed[_bins(x[through], z[through])]     # inf: open
+        out = np.isfinite(reach) & (r[through] > self.loop_inner + st.fit_ring[0])
+        return int(out.sum()) < st.fit_min_samples
+
+    def _free(self, scene: JudgeScene, rot, t) -> bool:
+        """Whether the object hangs free: its bottom (``free_band`` above its lowest point)
+        does not rest on an up-facing scene surface (at least ``free_fraction`` of it within
+        ``free_gap`` of one): a hanger lying on a chair's base or a bag standing on the shelf
+        under the edge it is hooked to is not hanging."""
+        st = self.settings
+        q = self.hanging_part @ rot.T + t
+        d, _ = scene.flat_tree.query(q, distance_upper_bound=st.free_gap * 1.01)
+        return float((d <= st.free_gap).mean()) < st.free_fraction
 
     # ------------------------------------------------------------------ judging
     def judge(self, scene: JudgeScene, pose) -> Verdict:
@@ -460,6 +566,14 @@ class Judge:
                             and self._loop_crossed(scene, rot, t))
             if not verdict.loop:
                 reasons.append("nothing passes through the hook")
+        if "fits" in self.tests and verdict.loop is not False:   # what passes through
+            verdict.fits = self._fits(scene, rot, t)
+            if not verdict.fits:
+                reasons.append("what it hangs from goes on sideways out of the hook")
+        if "free" in self.tests:
+            verdict.free = self._free(scene, rot, t)
+            if not verdict.free:
+                reasons.append("rests on a surface below instead of hanging free")
         if "ground" in self.tests:
             lowest = float(moved(self.samples)[:, 2].min())
             ground = scene.ground_level(com, st.ground_radius + self.radius)
@@ -487,6 +601,13 @@ class Judge:
             if verdict.seat_height > st.seat_above_ground:
                 reasons.append(f"seat {verdict.seat_height:.1f} m above the ground: out of "
                                "reach to ride")
+            elif "feet" not in self.tests:          # a rider's feet reach a floor or a rest
+                gap, why = self._feet_gap(scene, [moved(f) for f in self.feet], com,
+                                          above_ground=np.inf)   # a rest at any height
+                verdict.feet_gap = gap
+                if not gap <= st.rider_feet_reach:
+                    reasons.append(why or f"feet {gap:.2f} m above what they could rest on: "
+                                   "out of reach to ride")
         verdict.reasons = reasons
         verdict.valid = not reasons
         return verdict
@@ -622,7 +743,8 @@ class Judge:
                 return best
         return best
 
-    def _feet_gap(self, scene: JudgeScene, feet: list, com) -> tuple:
+    def _feet_gap(self, scene: JudgeScene, feet: list, com,
+                  above_ground: float | None = None) -> tuple:
         """Largest distance (m) from a sole down to the highest scene surface under it that one
         can stand on (the ground where none is under it); negative when the sole is below
         that surface; inf when a foot with nothing under it hangs more than
@@ -646,7 +768,8 @@ class Judge:
                            & (around[:, 2] <= sole + st.contact_tolerance) & flat]
             if len(under):
                 top = under[:, 2].max()
-                if top > ground + st.feet_above_ground:
+                if top > ground + (st.feet_above_ground if above_ground is None
+                                   else above_ground):
                     return float("inf"), (f"feet on a surface {top - ground:.1f} m above "
                                           "the ground")
                 worst = max(worst, sole - top)
@@ -655,6 +778,11 @@ class Judge:
             else:
                 worst = max(worst, sole - ground)
         return float(worst), None
+
+
+def _bins(x: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """The 10-degree direction bins (0-35) of in-plane offsets ``(x, z)``."""
+    return np.clip(np.floor((np.arctan2(z, x) + np.pi) / (np.pi / 18)), 0, 35).astype(np.int64)
 
 
 def _in_column(points: np.ndarray, column) -> np.ndarray:

@@ -40,6 +40,11 @@ FORMAT_VERSION = 1
 #: Hang sites on the top edge of a panel (no room below the hook for a rigid hanger).
 PANEL = re.compile(r"door|divider|panel|side")
 #: Seats at least 0.4 m wide (a round stool can be straddled; these cannot).
+#: The widest support a rider can sit astride (m): the example rider's legs are 7 cm apart
+#: from the seat down to the feet, and no body part goes more than 2 cm into the scene.
+RIDER_SUPPORT_WIDTH = 0.11
+#: Supports built to be ridden, whose body narrows under the seat between the legs.
+RIDEABLE = re.compile(r"motorbike")
 WIDE_SEAT = re.compile(r"sofa|bed|armchair|dining chair|office chair|bench seat")
 #: Place sites on a high working top (no board above it) where a person could be posed
 #: sitting on the edge with the feet in the air.
@@ -293,9 +298,13 @@ def _validation_poses(ex, name, vs, jscene) -> list:
     elif aff == "riding":
         for i, s in enumerate(by["astride"]):
             a = facing_angle(ex, s.facing)
-            add(site_pose(ex, s.point, a), True, "astride", s.note)
-            add(site_pose(ex, s.point, a + math.pi), True, "astride, facing the other way",
-                s.note)
+            if s.width <= RIDER_SUPPORT_WIDTH or RIDEABLE.search(s.note):
+                add(site_pose(ex, s.point, a), True, "astride", s.note)
+                add(site_pose(ex, s.point, a + math.pi), True, "astride, facing the other way",
+                    s.note)
+            else:
+                add(site_pose(ex, s.point, a), False,
+                    "astride a support wider than the legs are apart, legs through it", s.note)
             add(site_pose(ex, s.point, a + math.pi / 2), False, "across the support, not astride",
                 s.note)
             if i % 2 == 0:
@@ -451,18 +460,17 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
         # published kitchens' top riders straddled their 2.4-2.7 m walls)
         ex = examples["riding"]
         for point, angle, height, note in validation.wall_top_rides():
-            low = height < 1.3
+            low = height < 1.2
             out.append(_entry(ex, "validation:judge_traps",
                               site_pose(ex, point, angle),
                               low, "astride a low wall's top" if low else
                               f"astride a {height:g} m partition's top, out of reach", note))
-        # riders on a bench whose front rises 3 cm 10-12 cm ahead of the seat, as a saddle
-        # rises to a tank: the thighs a little into the rise, which the judge allows the
-        # legs (two judge-valid published riders, office-desk1's and office-desk4's, press
-        # their thighs 1-5 cm into a support rising ahead of the seat)
+        # riders on a 0.3 m bench whose front rises 3 cm 10-12 cm ahead of the seat, as a
+        # saddle rises to a tank: the legs, 7 cm apart, go through the bench
         for point, angle, note in validation.saddle_rides():
-            out.append(_entry(ex, "validation:judge_traps", site_pose(ex, point, angle), True,
-                              "astride a bench with a raised front, thighs on the rise", note))
+            out.append(_entry(ex, "validation:judge_traps", site_pose(ex, point, angle), False,
+                              "astride a bench with a raised front, legs through the bench",
+                              note))
         log(f"judge_traps: {len(out)} poses so far")
         # a hook round an office chair's star-base leg in a scan without its floor: the
         # hanger hangs through where the floor is (fooled the judge in office-desk6); and
@@ -521,8 +529,11 @@ def level_on_support(example, pose, angle: float, below: float = 0.01) -> np.nda
 #: grid), angle (radians), valid, case, note). Each was drawn (close-ups from four sides) and
 #: labelled by eye before the judge saw it.
 HAND_POSED: list = [
-    ("sitting", "scenes/living-room2.ply", (3.65, 3.53, 0.401), 3 * math.pi / 2, True,
-     "seat", "living-room2 upholstered bench, facing out"),
+    # the bench is lower than the example's stool: seated on it, the example's soles go
+    # 3-5 cm into the floor, more than any body part may go into the scene
+    ("sitting", "scenes/living-room2.ply", (3.65, 3.53, 0.401), 3 * math.pi / 2, False,
+     "on a seat lower than the example's, the feet into the floor",
+     "living-room2 upholstered bench, facing out"),
     ("sitting", "scenes/living-room2.ply", (3.65, 3.53, 0.401), math.pi / 2, False,
      "legs along the seat, through it", "living-room2 upholstered bench"),
     ("sitting", "scenes/living-room2.ply", (5.82, 1.93, 0.415), 0.0, True,

@@ -27,8 +27,20 @@ from interaction_tensor.geometry.load import load_geometry
 from interaction_tensor.outputs.render import _font
 from itensor_paper.common import write_csv
 from itensor_paper.judge import Judge, JudgeScene
-from itensor_paper.pictures import PANEL, _samples, closeup
+from itensor_paper.pictures import _samples, closeup, floor_under
 
+#: What raters are told beside the question.
+INSTRUCTIONS = (
+    "Each sheet shows poses of the object (drawn in one colour) in a scene, each beside its "
+    "id, in five pictures. The upper three are views: from one side, from another side "
+    "higher up, and from close by with the scene in front of the object taken away. The "
+    "lower two are cuts by two upright planes at right angles through the point where the "
+    "object rests on or hangs from the scene, seen square on: the scene's surfaces as grey "
+    "lines, the object's outline in its colour; they show what the object rests on and "
+    "whether anything passes into it. "
+    "For each id, answer yes or no to the question for the pose exactly as drawn, as you "
+    "would judge it in a real room, where nothing passes into furniture, walls or the "
+    "floor.")
 #: The one colour every posed object is drawn in.
 NEUTRAL = (196, 150, 82)
 #: The file of the panel's verdicts, shipped with the package.
@@ -128,61 +140,121 @@ def shuffled_ids(poses, seed: int = 0) -> list:
     return sorted(poses, key=lambda p: p.id)
 
 
-def _views(scene_samples, query_samples, pose) -> np.ndarray:
-    """(H, 2W, 3) uint8: the pose from the side that sees most of the object, and from a
-    quarter turn around and higher up; nothing of the scene is cut away, so that what the
-    scene hides (a body through a floor, an object inside a cabinet) stays hidden, as to
-    anyone looking at the place."""
+#: The size of one view (pixels); a pose is shown in three.
+VIEW = (400, 320)
+#: The size of one cut.
+CUT = (600, 320)
+
+
+def _views(scene_samples, query_samples, pose, affordance: str = "") -> np.ndarray:
+    """(H, 3W, 3) uint8: three views of a pose. The first two leave the scene whole, so that
+    what it hides (a body through a floor, an object inside a cabinet) stays hidden, as to
+    anyone looking at the place: from the side that sees most of the object, then a quarter
+    turn around and higher up. The third takes away the scene in front of the object, to
+    show what it passes into or rests on. A rider is seen first from the front or the back,
+    low, where both legs show on either side of what is between them."""
     sp, sn = scene_samples
     qp, qn = query_samples
-    first = closeup(sp, sn, qp, qn, pose, NEUTRAL, see_through=False)
-    # the second view: every azimuth a quarter turn from the first's candidates, from above
-    second = closeup(sp, sn, qp, qn, pose, NEUTRAL, azimuths=(120, 210, 300, 30),
-                     elevation=55.0, see_through=False)
-    return np.concatenate([first, second], axis=1)
+    yaw = float(np.degrees(np.arctan2(pose[1, 0], pose[0, 0])))
+    if affordance == "riding":
+        first_az = tuple(yaw + a for a in (0, 180, 25, -25, 155, 205))
+        second_az = tuple(yaw + a for a in (90, -90, 60, -60, 120, -120))
+        first_el, second_el = 12.0, 45.0
+    else:
+        first_az, second_az = (210, 300, 30, 120), (120, 210, 300, 30)
+        first_el, second_el = 22.0, 55.0
+    views = [closeup(sp, sn, qp, qn, pose, NEUTRAL, size=VIEW, azimuths=first_az,
+                     elevation=first_el, see_through=False, to_floor=True),
+             closeup(sp, sn, qp, qn, pose, NEUTRAL, size=VIEW, azimuths=second_az,
+                     elevation=second_el, see_through=False, to_floor=True),
+             closeup(sp, sn, qp, qn, pose, NEUTRAL, size=VIEW, azimuths=second_az,
+                     margin=0.3, elevation=15.0, see_through=True)]
+    return np.concatenate(views, axis=1)
 
 
-def draw(poses, scenes_dir, objects_dir, out_dir, per_sheet: int = 4) -> Path:
+def _cuts(scene_samples, query_samples, pose, support, margin: float = 0.3,
+          scene_slab: float = 0.012, query_slab: float = 0.006) -> np.ndarray:
+    """(H, 2W, 3) uint8: the posed object and the scene cut by two upright planes through
+    the point the interaction rests on (``support``, training frame: a bottle's or a
+    bowl's foot, a hook's top, a person's seat), along the object's own forward (+X) and
+    side (+Y) axes, seen square on, down to the floor under it: the
+    scene samples within ``scene_slab`` of a plane in grey, the object's within
+    ``query_slab`` in :data:`NEUTRAL`, framed to the object and ``margin`` around it."""
+    sp = scene_samples[0]
+    qp = query_samples[0] @ pose[:3, :3].T + pose[:3, 3]
+    centre = pose[:3, :3] @ np.asarray(support, float) + pose[:3, 3]
+    floor = floor_under(sp, qp.min(axis=0) - margin, qp.max(axis=0) + margin)
+    out = []
+    for axis in (pose[:3, 0], pose[:3, 1]):
+        along = np.array([axis[0], axis[1], 0.0])
+        along /= max(np.linalg.norm(along), 1e-9)
+        normal = np.array([-along[1], along[0], 0.0])
+        img = np.full((CUT[1], CUT[0], 3), 255, np.uint8)
+        q_u, q_z = (qp - centre) @ along, qp[:, 2] - centre[2]
+        half_u = max(np.abs(q_u).max(), 0.05) + margin
+        top = q_z.max() + margin
+        bottom = min(q_z.min() - margin, floor - centre[2] - 0.05)
+        scale = min(CUT[0] / (2 * half_u), CUT[1] / (top - bottom))
+        mid = (top + bottom) / 2
+        for pts, slab, colour in ((sp, scene_slab, (80, 80, 80)), (qp, query_slab, NEUTRAL)):
+            d = pts - centre
+            u, z = d @ along, d[:, 2]
+            m = (np.abs(d @ normal) <= slab) & (np.abs(u) <= half_u) & (z <= top) & \
+                (z >= bottom)
+            x = np.round(CUT[0] / 2 + u[m] * scale).astype(np.int64)
+            y = np.round(CUT[1] / 2 - (z[m] - mid) * scale).astype(np.int64)
+            for dx in (0, 1):
+                for dy in (0, 1):
+                    ok = (x + dx >= 0) & (x + dx < CUT[0]) & (y + dy >= 0) & (y + dy < CUT[1])
+                    img[y[ok] + dy, x[ok] + dx] = colour
+        out.append(img)
+    return np.concatenate(out, axis=1)
+
+
+def draw(poses, scenes_dir, objects_dir, out_dir, per_sheet: int = 2) -> Path:
     """Rating sheets of ``poses`` (:class:`PanelPose`) in ``out_dir``: per affordance,
-    ``<affordance>/sheet_NN.png`` with ``per_sheet`` poses each (two views a pose, its id
-    beside it, nothing else), ``<affordance>/question.txt`` (the affordance's question and
-    how to answer) and, for the panel's keeper, ``key.csv`` (ids and where the poses come
-    from). Returns ``out_dir``."""
+    ``<affordance>/sheet_NN.png`` with ``per_sheet`` poses each (three views and two cuts
+    a pose, its id beside it, nothing else), ``<affordance>/question.txt`` (the
+    affordance's question and how to answer) and, for the panel's keeper, ``key.csv`` (ids
+    and where the poses come from). Returns ``out_dir``."""
     from PIL import Image, ImageDraw
 
     out_dir = Path(out_dir)
     by_aff: dict = {}
     for p in poses:
         by_aff.setdefault(p.affordance, []).append(p)
-    queries, scenes = {}, {}
+    queries, supports, scenes = {}, {}, {}
     for aff, items in sorted(by_aff.items()):
         items.sort(key=lambda p: p.id)
         folder = out_dir / aff
         folder.mkdir(parents=True, exist_ok=True)
         for s in range(0, len(items), per_sheet):
             chunk = items[s:s + per_sheet]
-            w, h = 2 * PANEL[0], PANEL[1]
-            img = Image.new("RGB", (w + 90, len(chunk) * (h + 6)), (255, 255, 255))
+            w, h = 3 * VIEW[0], VIEW[1] + CUT[1] + 4
+            img = Image.new("RGB", (w + 90, len(chunk) * (h + 16)), (255, 255, 255))
             d = ImageDraw.Draw(img)
             for k, p in enumerate(chunk):
                 if p.example not in queries:
                     ex = affordances.build(p.example, objects_dir)
                     queries[p.example] = _samples(ex.query, 0.004)
+                    supports[p.example] = ex.support_point
                 if p.scene not in scenes:
                     scenes[p.scene] = _samples(load_geometry(Path(scenes_dir) / f"{p.scene}.ply"),
                                                0.01)
-                y = k * (h + 6)
-                img.paste(Image.fromarray(_views(scenes[p.scene], queries[p.example], p.pose)),
-                          (90, y))
+                y = k * (h + 16)
+                img.paste(Image.fromarray(_views(scenes[p.scene], queries[p.example], p.pose,
+                                                 p.affordance)), (90, y))
+                img.paste(Image.fromarray(_cuts(scenes[p.scene], queries[p.example], p.pose,
+                                                supports[p.example])),
+                          (90, y + VIEW[1] + 4))
                 d.rectangle([90, y, 90 + w - 1, y + h - 1], outline=(200, 200, 200))
+                d.line([90, y + VIEW[1] + 2, 90 + w - 1, y + VIEW[1] + 2], fill=(200, 200, 200))
                 d.text((8, y + h // 2 - 10), p.id, fill=(20, 20, 20), font=_font(18))
             with atomic_path(folder / f"sheet_{s // per_sheet + 1:02d}.png") as tmp:
                 img.save(tmp, format="PNG", optimize=True)
         aff_q = affordances.get(aff).question
         (folder / "question.txt").write_text(
-            f"{aff_q}\n\nEach row of a sheet shows one pose of the object (drawn in one "
-            "colour) in a scene, from two sides. For each id, answer yes or no to the "
-            "question, as you would judge the place in a real room.\n")
+            f"{aff_q}\n\n{INSTRUCTIONS}\n")
     write_csv(out_dir / "key.csv", [p.row() for p in poses], COLUMNS)
     write_json(out_dir / "poses.json", {"count": len(poses),
                                          "per_affordance": {a: len(v) for a, v in
@@ -271,6 +343,62 @@ def merge_answers(poses, *answer_files) -> list:
             if pid in by_id:
                 by_id[pid].answers.append(ans)
     return poses
+
+
+def rater_agreement(poses) -> float | None:
+    """How often two raters of the same pose gave the same answer (%, over every pair of
+    raters of every pose), or None without two answers to any pose."""
+    same = pairs = 0
+    for p in poses:
+        a = p.answers
+        for i in range(len(a)):
+            for j in range(i + 1, len(a)):
+                pairs += 1
+                same += a[i] == a[j]
+    return round(100.0 * same / pairs, 1) if pairs else None
+
+
+def agreement_rows(poses, judged: dict) -> list:
+    """Per affordance and split (``development``: the poses the judge's rules were fixed
+    on; ``held-out``: the others): poses with a majority, on how many the judge agrees,
+    that share (%), how many the panel and the judge call valid, and how often two raters
+    agree (%)."""
+    rows = []
+    for aff in affordances.names():
+        for split, held in (("development", False), ("held-out", True)):
+            items = [p for p in poses if p.affordance == aff and p.held_out == held
+                     and p.id in judged]
+            decided = [p for p in items if p.majority is not None]
+            agree = sum(judged[p.id] == p.majority for p in decided)
+            rows.append({"affordance": aff, "split": split, "poses": len(decided),
+                         "agree": agree,
+                         "agreement": round(100.0 * agree / len(decided), 1) if decided
+                         else None,
+                         "panel_valid": sum(bool(p.majority) for p in decided),
+                         "judge_valid": sum(judged[p.id] for p in decided),
+                         "raters_agree": rater_agreement(items)})
+    return rows
+
+
+#: The columns of ``panel_agreement.csv`` (:func:`agreement_rows`).
+AGREEMENT_COLUMNS = ["affordance", "split", "poses", "agree", "agreement", "panel_valid",
+                     "judge_valid", "raters_agree"]
+
+
+def agreement_markdown(rows: list) -> str:
+    """:func:`agreement_rows` as a Markdown table, one line per affordance."""
+    lines = ["| affordance | judge agrees with the panel: held-out poses | development poses | "
+             "panel / judge call valid (held-out) | two raters agree |",
+             "|---|---:|---:|---:|---:|"]
+    for aff in affordances.names():
+        held = next(r for r in rows if r["affordance"] == aff and r["split"] == "held-out")
+        dev = next(r for r in rows if r["affordance"] == aff and r["split"] == "development")
+
+        def share(r):
+            return f"{r['agree']}/{r['poses']} ({r['agreement']} %)" if r["poses"] else "-"
+        lines.append(f"| {aff} | {share(held)} | {share(dev)} | {held['panel_valid']} / "
+                     f"{held['judge_valid']} | {held['raters_agree']} % |")
+    return "\n".join(lines)
 
 
 def add_panel_agreement(rows: list, scenes_dir, objects_dir=None, log=None) -> list:

@@ -42,13 +42,15 @@ def _samples(geometry, spacing: float, seed: int = 0, limit: int = 2_500_000):
 def closeup(scene_points, scene_normals, query_points, query_normals, pose, colour,
             margin: float | None = None, size=PANEL, azimuths=(210, 300, 30, 120),
             elevation: float = 22.0, spacing: float = 0.01, cut: float = 0.05,
-            touch: float = 0.03, see_through: bool = True) -> np.ndarray:
+            touch: float = 0.03, see_through: bool = True,
+            to_floor: bool = False) -> np.ndarray:
     """(H, W, 3) uint8: the posed query object and the scene within ``margin`` (m; default
     the object's size, at least 0.3 m, and 0.4 m above it: a tap over a mug) of it, from
     the side that sees most of it. With ``see_through``, the scene points that would still
     hide it (a cabinet door, a panel more than ``touch`` m in front of it) are left out;
     without, the scene hides what it hides (a body sunk into a floor shows no legs), as a
-    person looking at the place would see it."""
+    person looking at the place would see it. With ``to_floor``, the box goes down to the
+    lowest scene point under it, so that the floor shows how high the object is."""
 
     rot, t = pose[:3, :3], pose[:3, 3]
     q = query_points @ rot.T + t
@@ -57,6 +59,8 @@ def closeup(scene_points, scene_normals, query_points, query_normals, pose, colo
         margin = max(0.3, float(np.ptp(q, axis=0).max()))
     lo, hi = q.min(axis=0) - margin, q.max(axis=0) + margin
     hi[2] = max(hi[2], q[:, 2].max() + 0.4)
+    if to_floor:
+        lo[2] = min(lo[2], floor_under(scene_points, lo, hi))
     keep = np.all((scene_points >= lo) & (scene_points <= hi), axis=1)
     sp, sn = scene_points[keep], scene_normals[keep]
     frame = np.vstack([q, [lo, hi]])
@@ -91,6 +95,13 @@ def closeup(scene_points, scene_normals, query_points, query_normals, pose, colo
     cv.points(sp[~front], SCENE, sn[~front], size=spacing * 1.6)
     cv.points(q, colour, qn, size=qs)
     return cv.image()
+
+
+def floor_under(scene_points, lo, hi) -> float:
+    """The lowest scene point over the plan of the box ``lo``-``hi`` (its bottom without
+    any)."""
+    over = np.all((scene_points[:, :2] >= lo[:2]) & (scene_points[:, :2] <= hi[:2]), axis=1)
+    return float(scene_points[over, 2].min()) if over.any() else float(lo[2])
 
 
 def _in_front(cam, scene_points, q, q_size: float, touch: float, halo_px: int = 4) -> np.ndarray:

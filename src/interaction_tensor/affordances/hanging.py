@@ -50,5 +50,5 @@ AFFORDANCE = Affordance(
                     clearance_limit=0.10, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),
                     collision=[(0.01, None)], through=True, below_ground=0.01),
-    judge=JudgeRule(("upright", "penetration", "contact", "loop", "ground")),
+    judge=JudgeRule(("upright", "penetration", "contact", "loop", "fits", "free", "ground")),
 )

@@ -30,7 +30,7 @@ UP = (0.0, 0.0, 1.0)
 DOWN = (0.0, 0.0, -1.0)
 #: The judge's tests (the paper's reproduction implements each; ``itensor_paper.judge``).
 JUDGE_TESTS = ("upright", "penetration", "contact", "support", "overhead", "basin", "sink",
-               "loop", "ground", "feet", "astride", "legroom", "mount")
+               "loop", "fits", "free", "ground", "feet", "astride", "legroom", "mount")
 
 
 @dataclass(frozen=True)

@@ -213,9 +213,9 @@ def _judge_traps():
     has the calves along the front, :func:`flush_counter_edges`); two stepped units, a low
     one (a seat with a foot rest 20 cm up) and a tall one (its top 1.65 m up, the step 1.2 m:
     :func:`stepped_unit_seats`); and the floor slab's open +x and +y edges
-    (:func:`floor_edge_seats`). For the riding judge: a low wall (0.9 m), partitions of
-    1.4 m and 1.6 m and a tall one (2.4 m), each 1.2 m long, whose tops a rider can straddle
-    (:func:`wall_top_rides`)."""
+    (:func:`floor_edge_seats`). For the riding judge: a low wall (0.9 m) and a low panel
+    (0.7 m, 5 cm thick), partitions of 1.4 m and 1.6 m and a tall one (2.4 m), each 1.2 m
+    long, whose tops a rider can straddle (:func:`wall_top_rides`)."""
     k = F._Kit()
     k.box((-0.6, -0.3, 0.71), (0.6, 0.3, 0.74))                      # table top
     for x in (-0.5, 0.5):
@@ -290,9 +290,9 @@ def star_base_hooks(scene: "ValidationScene", radius: float = 0.2) -> list:
 TRAPS_SIZE = (5.6, 3.4)
 #: The judge traps' walls a rider can straddle: (name, centre x, centre y, height,
 #: thickness), all 1.2 m long along y.
-WALL_TOPS = (("low wall", 4.9, 0.9, 0.9, 0.12), ("tall partition", 4.9, 2.5, 2.4, 0.10),
+WALL_TOPS = (("low wall", 4.9, 0.9, 0.9, 0.10), ("tall partition", 4.9, 2.5, 2.4, 0.10),
              ("mid partition", 4.2, 1.7, 1.6, 0.10), ("chest-high partition", 0.45, 1.7, 1.4,
-                                                      0.10))
+                                                      0.10), ("low panel", 2.4, 2.2, 0.7, 0.05))
 
 
 #: The judge traps' bench (x range, y range, top height; m), its front at the larger y, with
@@ -327,7 +327,7 @@ def wall_top_rides() -> list:
     """Where a rider straddles the top of :func:`_judge_traps`'s walls, facing along them:
     [(point on the top's centre line (3,), facing angle (radians), height m, note)]."""
     return [((x0, y0 + dy, height), angle, height, f"{name}, y {dy:+.1f}")
-            for name, x0, y0, height, _ in WALL_TOPS for dy in (-0.2, 0.0, 0.2)
+            for name, x0, y0, height, _ in WALL_TOPS for dy in (-0.25, -0.1, 0.0, 0.1, 0.25)
             for angle in (math.pi / 2, -math.pi / 2)]
 
 
