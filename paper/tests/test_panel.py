@@ -128,3 +128,24 @@ def test_panel_agreement_writes_the_judges_agreement(tmp_path, capsys):
         rows = {(r["affordance"], r["split"]): r for r in csv.DictReader(fh)}
     held = rows[("placing", "held-out")]
     assert (held["poses"], held["agree"], held["judge_valid"]) == ("2", "1", "0")
+
+
+def test_panel_sheets_draws_a_panels_own_poses_again_without_their_answers(tmp_path):
+    from interaction_tensor.cli.main import main
+
+    objects = shared_file("objects/paper_bowl.ply").parent
+    scenes = shared_file("scenes/office-desk1.ply").parent
+    pose = np.eye(4)
+    pose[:3, 3] = (0.5, 0.3, 0.75)
+    poses = [panel.PanelPose("Q0001", "placing", "placing-bowl", "office-desk1", "Naive", "top",
+                             1, pose, True, ["yes", "no", "yes"]),
+             panel.PanelPose("Q0002", "hanging", "hanging-hanger", "office-desk1", "Naive",
+                             "top", 1, pose, True, ["no", "no", "no"])]
+    panel.save(poses, tmp_path / "panel.csv")
+    assert main(["paper", "panel-sheets", str(tmp_path / "panel.csv"), "--affordance", "placing",
+                 "-o", str(tmp_path / "sheets"), "--scenes", str(scenes), "--objects",
+                 str(objects), "--quiet"]) == 0
+    assert (tmp_path / "sheets" / "placing" / "sheet_01.png").is_file()
+    assert not (tmp_path / "sheets" / "hanging").exists()
+    key = panel.load(tmp_path / "sheets" / "key.csv")
+    assert [(p.id, p.answers) for p in key] == [("Q0001", [])]
