@@ -117,7 +117,13 @@ def test_bad_inputs_give_one_line_errors(files, descriptor, tmp_path):
 
 def test_usage_errors_exit_non_zero():
     proc = run("detect")
-    assert proc.returncode == 2 and "usage" in proc.stderr
+    assert proc.returncode == 2 and "usage" not in proc.stderr
+    assert proc.stderr.strip().count("\n") == 0 and "the following arguments are required" \
+        in proc.stderr and "'itensor detect --help'" in proc.stderr
+    for option in (["--top-k", "-3"], ["--top-k", "0"], ["--sample-fraction", "2"]):
+        proc = run("detect", "scene.ply", "d.npz", "-o", "out", *option)
+        assert proc.returncode == 2 and proc.stderr.strip().count("\n") == 0, proc.stderr
+        assert f"argument {option[0]}" in proc.stderr and "--help" in proc.stderr
     assert run("--version", check=0).stdout.startswith("itensor ")
 
 

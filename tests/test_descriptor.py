@@ -165,3 +165,12 @@ def test_pose_maps_the_reference_point_to_the_test_point(corner_tensor):
     ref = np.r_[corner_tensor.reference_point, 1]
     np.testing.assert_allclose(m @ ref, [1.0, 2.0, 0.5, 1])
     np.testing.assert_allclose(m[:3, :3] @ [1, 0, 0], [0, 1, 0], atol=1e-12)
+
+
+def test_a_descriptors_repr_is_one_line():
+    from interaction_tensor import affordances
+
+    tensor = affordances.build_descriptor("placing-bowl")
+    text = repr(tensor)
+    assert "\n" not in text and len(text) < 200 and str(tensor) == text
+    assert "'placing-bowl'" in text and "512 weighted" in text

@@ -181,6 +181,24 @@ def test_not_descriptors_never_load_and_never_mention_pickle(real, tmp_path):
     assert "allow_pickle" not in str(info.value)
 
 
+@pytest.mark.parametrize("content, says", [
+    (b"a plain text file\n", "not a .npz archive"),
+    (b"", "an empty file"),
+    (None, "a pickle: it holds Python objects"),
+    (b"\x93NUMPY\x01\x00", "a single .npy array"),
+])
+def test_a_file_that_is_not_a_descriptor_is_refused_for_what_it_is(tmp_path, content, says):
+    import pickle
+
+    path = tmp_path / "d.npz"
+    path.write_bytes(pickle.dumps([1, 2]) if content is None else content)
+    with pytest.raises(it.InputError) as info:
+        it.InteractionTensor.load(path)
+    assert str(info.value) == f"{path}: not a descriptor file ({says}" + \
+        str(info.value).split(says, 1)[1]
+    assert says in str(info.value) and "\n" not in str(info.value)
+
+
 @pytest.mark.parametrize("example, field, default, good, wrong, wrong_in_file", [
     ("sitting-human", "feet_reach", 0.25, 0.3, (-0.01, 2.0, "on", True), ("far", -1.0, 3.0)),
     ("riding-human", "mount_height", 1.3, 1.2, (-0.1, 11.0, "high", True),

@@ -28,11 +28,15 @@ class HelpFormatter(argparse.HelpFormatter):
 
 
 class Parser(argparse.ArgumentParser):
-    """``itensor``'s parsers: defaults shown in ``--help``."""
+    """``itensor``'s parsers: defaults shown in ``--help``; a usage error is one line that
+    names the option and points to ``--help``, not the whole usage."""
 
     def __init__(self, *args, **kwargs):
         kwargs.setdefault("formatter_class", HelpFormatter)
         super().__init__(*args, **kwargs)
+
+    def error(self, message):
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
 
 def number(kind=float, *, low=None, high=None, low_open: bool = False, what: str | None = None):

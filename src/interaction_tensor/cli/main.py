@@ -506,7 +506,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("demo", help="train and detect on built-in procedural data")
     p.add_argument("-o", "--output", default="demo_out", help="output directory")
-    p.add_argument("--top-k", type=number(int, low=0), default=10,
+    p.add_argument("--top-k", type=number(int, low=1), default=10,
                    help="predictions kept after suppression")
     seed_option(p)
     p.add_argument("--render", action="store_true",

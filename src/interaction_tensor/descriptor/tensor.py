@@ -697,6 +697,17 @@ class InteractionTensor:
         if path.is_dir():
             raise InputError(path, "is a directory, expected a descriptor (.npz) file")
         try:
+            with open(path, "rb") as fh:
+                magic = fh.read(4)
+        except OSError as exc:
+            raise InputError(path, f"cannot read it ({exc.strerror or exc})") from None
+        if magic != b"PK\x03\x04":           # every .npz is a zip archive
+            reason = ("a pickle: it holds Python objects, which are never loaded"
+                      if magic[:1] == b"\x80" else
+                      "a single .npy array, not a .npz archive" if magic == b"\x93NUM"
+                      else "not a .npz archive" if magic else "an empty file")
+            raise InputError(path, f"not a descriptor file ({reason})")
+        try:
             with np.load(path, allow_pickle=False) as data:
                 arrays = {k: data[k] for k in data.files}
         except Exception as exc:  # zip, npy and pickle refusals alike: one line, no advice
@@ -746,6 +757,15 @@ class InteractionTensor:
             thresholds=header["thresholds"],
             self_scores=header["self_scores"], meta=header["meta"])
         return tensor
+
+    def __repr__(self) -> str:
+        """One line: what it is for and what it holds (``summary()`` and ``itensor info``
+        say the rest)."""
+        n = np.round(np.asarray(self.affordance_normal, float), 3).tolist()
+        return (f"<InteractionTensor {self.affordance!r}: {len(self.weighted.points)} weighted "
+                f"+ {len(self.uniform.points)} uniform keypoints, "
+                f"{len(self.bisector_points)} bisector points, radius {self.radius:.3f} m, "
+                f"normal {n}, threshold {self.threshold():.3f}>")
 
     def summary(self) -> dict:
         """A JSON-able summary of what the descriptor holds (for ``itensor info``)."""
