@@ -62,8 +62,13 @@ def test_train_info_detect(files, descriptor):
     for key in ("scene_points", "test_points_sampled", "candidates_after_normal_filter",
                 "keypoint_comparisons", "seconds"):
         assert key in doc["stats"]
-    assert doc["accepted"]["count"] == len(doc["accepted"]["score"])
-    assert all(1 <= c <= 512 for c in doc["accepted"]["comparisons_to_decision"])
+    assert doc["accepted"]["file"] == "accepted.npz"
+    with np.load(out / "accepted.npz", allow_pickle=False) as acc:
+        assert sorted(acc.files) == sorted(doc["accepted"]["columns"])
+        assert doc["accepted"]["count"] == len(acc["score"]) == len(acc["point_index"]) > 0
+        assert all(1 <= c <= 512 for c in acc["comparisons_to_decision"])
+        assert np.all(acc["score"] >= doc["parameters"]["threshold_used"] - 1e-6)
+        assert acc["point_index"].max() < doc["stats"]["scene_points"]
     assert doc["stats"]["mean_comparisons_to_accept"] <= 512
     assert (out / "heatmap.ply").stat().st_size > 0
     header = (out / "heatmap.ply").read_bytes()[:400].decode("ascii", "replace")

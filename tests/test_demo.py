@@ -16,6 +16,10 @@ def test_demo_writes_its_outputs(demo_run):
     assert len(doc["predictions"]) == 10
     assert len(list((demo_run / "top").glob("top_*.ply"))) == 10
     assert doc["stats"]["test_points_sampled"] == round(0.3 * doc["stats"]["scene_points"])
+    # tens of thousands of accepted pairs, in a binary file beside a small JSON
+    with np.load(demo_run / "accepted.npz", allow_pickle=False) as acc:
+        assert len(acc["score"]) == doc["accepted"]["count"] > 10_000
+    assert (demo_run / "predictions.json").stat().st_size < 50_000
 
 
 def test_demo_top_predictions_are_on_free_surfaces(demo_run):

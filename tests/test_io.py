@@ -99,7 +99,7 @@ def test_degenerate_geometry_is_rejected(tmp_path):
 
 
 def test_write_json_writes_gathered_columns_as_their_arrays(tmp_path):
-    """A Gathered column (what predictions.json's accepted pairs are) is written exactly as
+    """A Gathered column (a block-wise view of a big array) is written exactly as
     the gathered array would be, a block at a time, without being gathered whole."""
     import json
 

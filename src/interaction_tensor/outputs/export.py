@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
 
 from interaction_tensor.geometry.files import (
-    Gathered,
     atomic_path,
     write_json,
     write_mesh,
@@ -58,9 +58,10 @@ def heat_properties(detection) -> dict:
 OBJECT_COLOR = (230, 60, 40, 255)
 
 #: every name a detection's output directory may hold (``Detection.save``, ``itensor view``)
-OUTPUT_NAMES = ("predictions.json", "heatmap.ply", "predictions.glb", "top", "render.png",
-                "index.html", "predictions_input_frame.json", "heatmap_input_frame.ply",
-                "top_input_frame", "scene.ply", "scene_input_frame.ply")
+OUTPUT_NAMES = ("predictions.json", "accepted.npz", "heatmap.ply", "predictions.glb", "top",
+                "render.png", "index.html", "predictions_input_frame.json",
+                "heatmap_input_frame.ply", "top_input_frame", "scene.ply",
+                "scene_input_frame.ply")
 
 
 def heat_colors(detection, step: int = 1) -> np.ndarray:
@@ -144,10 +145,32 @@ def write_glb(detection, path) -> None:
         tmp.write_bytes(trimesh.exchange.gltf.export_glb(scene))
 
 
+#: The file of every accepted pair (:func:`write_accepted`), beside ``predictions.json``.
+ACCEPTED_FILE = "accepted.npz"
+#: Its arrays, one entry per accepted (test point, orientation) pair.
+ACCEPTED_COLUMNS = ("point_index", "orientation_index", "score", "comparisons_to_decision")
+
+
+def write_accepted(path, detection, accepted) -> None:
+    """``accepted.npz``: every accepted pair as the arrays of :data:`ACCEPTED_COLUMNS`
+    (``point_index`` into the scene's points, int32; ``orientation_index``, int16;
+    ``score``, float32; ``comparisons_to_decision``, int32), compressed, atomically; read it
+    with ``numpy.load``, no pickle."""
+    det = detection
+    arrays = {"point_index": det.pair_point[accepted].astype(np.int32),
+              "orientation_index": det.pair_orientation[accepted].astype(np.int16),
+              "score": det.pairs.score[accepted].astype(np.float32),
+              "comparisons_to_decision": det.pairs.decided_at[accepted].astype(np.int32)}
+    buf = io.BytesIO()
+    np.savez_compressed(buf, **arrays)
+    with atomic_path(path) as tmp:
+        tmp.write_bytes(buf.getvalue())
+
+
 def export(detection, outdir, scene_name: str | None = None,
            descriptor_name: str | None = None) -> dict:
-    """Write ``predictions.json``, ``heatmap.ply``, ``predictions.glb`` and ``top/`` into
-    ``outdir``.
+    """Write ``predictions.json``, ``accepted.npz``, ``heatmap.ply``, ``predictions.glb`` and
+    ``top/`` into ``outdir``.
 
     Every file is written atomically. Returns the JSON document written.
     """
@@ -165,16 +188,10 @@ def export(detection, outdir, scene_name: str | None = None,
     for rank, (v, f) in enumerate(posed_objects(det), 1):
         write_mesh(top / f"top_{rank:02d}.ply", v, f, color=OBJECT_COLOR)
     write_glb(det, outdir / "predictions.glb")
-    # the accepted pairs' columns: gathered a block at a time as io.write_json writes them
+    # the accepted pairs, however many, go to a compact binary file beside the JSON
     acc = det.accepted
-    accepted = {
-        "count": int(len(acc)),
-        "columns": ["point_index", "orientation_index", "score", "comparisons_to_decision"],
-        "point_index": Gathered(det.pair_point, acc),
-        "orientation_index": Gathered(det.pair_orientation, acc),
-        "score": Gathered(det.pairs.score, acc),
-        "comparisons_to_decision": Gathered(det.pairs.decided_at, acc),
-    }
+    write_accepted(outdir / ACCEPTED_FILE, det, acc)
+    accepted = {"count": int(len(acc)), "file": ACCEPTED_FILE, "columns": list(ACCEPTED_COLUMNS)}
     doc = {
         "scene": scene_name or det.scene.source,
         "descriptor": descriptor_name or tensor.affordance,
