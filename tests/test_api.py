@@ -224,3 +224,23 @@ def test_units_are_checked_and_training_inputs_make_sense(files, tmp_path):
         it.train(ex.scene_object, ex.scene_object, "x", spacing=SPACING)
     with pytest.raises(it.InputError, match="reference_point .* beyond the interaction"):
         it.train(ex.query, ex.scene_object, "x", spacing=SPACING, reference_point=(9, 9, 9))
+
+
+def test_a_saved_result_carries_its_descriptor_for_the_viewer(files, tensor, tmp_path):
+    """A descriptor made in Python has no file: the result carries a copy, and the viewer
+    shows the training example from it. One named by its file is not copied."""
+    from interaction_tensor.outputs.html import build_data
+
+    result = it.detect(files / "kitchen.ply", tensor, sample_fraction=0.05, top_k=2, seed=0)
+    out = result.save(tmp_path / "api")
+    doc = json.loads((out / "predictions.json").read_text())
+    assert doc["descriptor"] == "placing-bowl" and doc["descriptor_file"] == "descriptor.npz"
+    copy = it.InteractionTensor.load(out / "descriptor.npz")
+    np.testing.assert_array_equal(copy.bisector_points, tensor.bisector_points)
+    data = build_data(out)
+    assert data["example"] is not None and data["descriptor_note"] is None
+    named = tensor.save(tmp_path / "bowl.npz")
+    out = result.save(tmp_path / "cli", descriptor_name=str(named))
+    assert not (out / "descriptor.npz").exists()
+    assert "descriptor_file" not in json.loads((out / "predictions.json").read_text())
+    assert build_data(out)["example"] is not None

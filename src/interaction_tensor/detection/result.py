@@ -16,6 +16,7 @@ from interaction_tensor.engine.scoring import PairScores
 from interaction_tensor.geometry.files import atomic_dir, output_path
 from interaction_tensor.geometry.scene import Scene
 from interaction_tensor.outputs.export import (
+    DESCRIPTOR_FILE,
     OUTPUT_NAMES,
     export,
     result_open3d,
@@ -133,10 +134,12 @@ class Detection:
         transaction: built in a temporary sibling directory and swapped in, so ``outdir``
         holds either the complete earlier result or the complete new one.
 
-        ``predictions.json``, ``heatmap.ply`` (score as ``quality`` and ``scalar_score``),
-        ``predictions.glb`` (scene heat map and posed objects, for browsers and Blender) and
-        ``top/``; for a captured scene also the same in the input's own frame; with
-        ``render`` also ``render.png``. ``also`` maps further file names to functions that
+        ``predictions.json``, ``accepted.npz``, ``heatmap.ply`` (score as ``quality`` and
+        ``scalar_score``), ``predictions.glb`` (scene heat map and posed objects, for browsers
+        and Blender) and ``top/``; ``descriptor.npz``, a copy of the descriptor, unless
+        ``descriptor_name`` is the path of its file (so that ``itensor view`` shows the
+        training example however the descriptor was made); for a captured scene also the
+        same in the input's own frame; with ``render`` also ``render.png``. ``also`` maps further file names to functions that
         write them (given the path), inside the same transaction. An existing ``outdir`` must
         be empty or hold an earlier result (and nothing else). Returns ``outdir`` as a Path.
         """
@@ -144,11 +147,17 @@ class Detection:
         t = time.perf_counter()
         report = getattr(self.scene, "report", None)
         also = dict(also or {})
+        # a descriptor named by its file (or written with the result) needs no copy
+        given = Path(str(descriptor_name)) if descriptor_name is not None else None
+        named = given is not None and given.suffix == ".npz" and (given.is_file()
+                                                                  or given.name in also)
         with atomic_dir(outdir, "predictions.json", OUTPUT_NAMES + tuple(also)) as tmp:
             for name, write in also.items():
                 write(tmp / name)
+            if not named:       # made in Python or moved: the viewer finds a copy beside
+                self.tensor.save(tmp / DESCRIPTOR_FILE)
             export(self, tmp, scene_name or (report.source if report is not None else None),
-                   descriptor_name)
+                   descriptor_name, None if named else DESCRIPTOR_FILE)
             if report is not None:
                 write_input_frame_outputs(self, tmp, report.transform, report)
             self.stats["seconds"]["export"] = round(time.perf_counter() - t, 4)

@@ -57,11 +57,15 @@ def heat_properties(detection) -> dict:
 
 OBJECT_COLOR = (230, 60, 40, 255)
 
+#: the copy of the descriptor a result carries when its file is not named
+#: (:meth:`~interaction_tensor.detection.result.Detection.save`)
+DESCRIPTOR_FILE = "descriptor.npz"
+
 #: every name a detection's output directory may hold (``Detection.save``, ``itensor view``)
-OUTPUT_NAMES = ("predictions.json", "accepted.npz", "heatmap.ply", "predictions.glb", "top",
-                "render.png", "index.html", "predictions_input_frame.json",
-                "heatmap_input_frame.ply", "top_input_frame", "scene.ply",
-                "scene_input_frame.ply")
+OUTPUT_NAMES = ("predictions.json", "accepted.npz", DESCRIPTOR_FILE, "heatmap.ply",
+                "predictions.glb", "top", "render.png", "index.html",
+                "predictions_input_frame.json", "heatmap_input_frame.ply", "top_input_frame",
+                "scene.ply", "scene_input_frame.ply")
 
 
 def heat_colors(detection, step: int = 1) -> np.ndarray:
@@ -168,7 +172,7 @@ def write_accepted(path, detection, accepted) -> None:
 
 
 def export(detection, outdir, scene_name: str | None = None,
-           descriptor_name: str | None = None) -> dict:
+           descriptor_name: str | None = None, descriptor_file: str | None = None) -> dict:
     """Write ``predictions.json``, ``accepted.npz``, ``heatmap.ply``, ``predictions.glb`` and
     ``top/`` into ``outdir``.
 
@@ -195,6 +199,7 @@ def export(detection, outdir, scene_name: str | None = None,
     doc = {
         "scene": scene_name or det.scene.source,
         "descriptor": descriptor_name or tensor.affordance,
+        **({"descriptor_file": descriptor_file} if descriptor_file else {}),
         "affordance": tensor.affordance,
         "parameters": {**det.settings.to_dict(), "threshold_used": det.threshold},
         "pose_convention": "x_scene = pose @ [x_query_training_frame, 1]; angle about +Z",

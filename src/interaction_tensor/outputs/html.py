@@ -43,8 +43,12 @@ def _mesh(vertices, faces, size=None) -> dict:
 
 
 def _find_descriptor(doc: dict, outdir: Path):
-    """The descriptor a detection used, if it can still be found: the path as written,
-    then relative to the output directory, then its file name inside it."""
+    """The descriptor a detection used, if it can still be found: the copy the result
+    carries, the path as written, then relative to the output directory, then its file name
+    inside it."""
+    copy = doc.get("descriptor_file")
+    if copy and (outdir / Path(str(copy)).name).is_file():
+        return outdir / Path(str(copy)).name
     name = doc.get("descriptor")
     if not name:
         return None
