@@ -244,3 +244,24 @@ def test_a_saved_result_carries_its_descriptor_for_the_viewer(files, tensor, tmp
     assert not (out / "descriptor.npz").exists()
     assert "descriptor_file" not in json.loads((out / "predictions.json").read_text())
     assert build_data(out)["example"] is not None
+
+
+def test_an_empty_result_says_why_and_what_to_do(tmp_path):
+    """A cloud much sparser than the descriptor's spacing leaves the placement tests nothing
+    to find: the result says so instead of being silently empty; so does a scene with no
+    surface facing the descriptor's way (a wall for a bowl)."""
+    from interaction_tensor.geometry.sampling import mesh_area, sample_mesh
+
+    ex = demo.build()
+    bowl = it.train(ex.query, ex.scene_object, affordance="placing-bowl")     # at 1 cm
+    sparse, _ = sample_mesh(ex.scene, int(mesh_area(ex.scene) / 0.03 ** 2), 0)
+    result = it.detect(sparse, bowl, sample_fraction=0.1, seed=0)
+    assert not result.predictions and len(result.warnings) == 1
+    assert "cm apart" in result.warnings[0] and "denser" in result.warnings[0]
+    out = result.save(tmp_path / "sparse")
+    assert json.loads((out / "predictions.json").read_text())["stats"]["warnings"] == \
+        result.warnings
+    wall = it.Geometry(np.array([[0, 0, 0], [2, 0, 0], [2, 0, 2], [0, 0, 2.0]]),
+                       np.array([[0, 1, 2], [0, 2, 3]]))              # nothing faces up
+    result = it.detect(wall, bowl, sample_fraction=0.2, seed=0)
+    assert not result.predictions and "faces the descriptor's direction" in result.warnings[0]

@@ -309,9 +309,8 @@ def cmd_detect(args) -> int:
     result = detect(args.scene, tensor, _detect_settings(args), progress=_show_progress(args),
                     **options)
     report = getattr(result.scene, "report", None)
-    if report is not None:
-        for warning in report.warnings:
-            print(f"itensor: warning: {warning}", file=sys.stderr)
+    for warning in (report.warnings if report is not None else []) + result.warnings:
+        print(f"itensor: warning: {warning}", file=sys.stderr)
     t0 = time.perf_counter()
     result.save(outdir, descriptor_name=str(args.descriptor), render=args.render)
     if report is not None and report.alignment is not None:

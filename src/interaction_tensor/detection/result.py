@@ -89,6 +89,9 @@ class Detection:
     scored: np.ndarray | None = None
     #: how the search did its work (:class:`~.search.Engine`)
     engine: object = field(default=None, repr=False)
+    #: what a user should know about this result, one line each: an empty result says why
+    #: and what to do (:func:`~.search.empty_result_warnings`)
+    warnings: list = field(default_factory=list)
 
     @property
     def accepted(self) -> np.ndarray:

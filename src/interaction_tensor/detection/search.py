@@ -215,7 +215,44 @@ def _finish(scene, tensor, settings, engine, threshold, test_idx, cand, pair_poi
         "candidates_per_second": (float(len(cand) / deciding_s) if deciding_s > 0 else None),
         "pairs_per_second": (float(len(pair_point) / deciding_s) if deciding_s > 0 else None),
     })
+    if engine.rank and not det.predictions:
+        det.warnings += empty_result_warnings(det)
+    det.stats["warnings"] = list(det.warnings)
     return det
+
+
+#: A scene whose points are this many times further apart than the descriptor's training
+#: spacing is too sparse for the placement tests, which look for scene points near the
+#: query's surface at that spacing.
+SPARSE_FACTOR = 1.5
+
+
+def empty_result_warnings(det) -> list:
+    """Why a detection found no place, as one line that says what to do: the scene too
+    sparse for the descriptor, nothing past the normal filter, no pair scoring to the
+    threshold, or the placement tests rejecting every pair that did (which tests, how
+    many)."""
+    st, tensor = det.stats, det.tensor
+    spacing, trained = float(det.scene.spacing), float(tensor.scene_spacing)
+    if spacing > SPARSE_FACTOR * trained:
+        return [f"no place found, and the scene's points are {100 * spacing:.1f} cm apart "
+                f"where the descriptor expects {100 * trained:.1f} cm: give a denser scan or "
+                f"cloud, or a mesh (sampled at the descriptor's spacing)"]
+    if not st["candidates_after_normal_filter"]:
+        return ["no place found: no test point faces the descriptor's direction (N_aff); "
+                "check that the scene is +Z up in metres (--up, --scale)"]
+    if not st["pairs_accepted_by_score"]:
+        return [f"no place found: no pair scored {st['threshold']:.3f} or more; the scene "
+                "may hold no such place, or try a larger --sample-fraction"]
+    if st.get("collision_tests_exhausted"):
+        return ["no place found: the collision test's budget was spent before a pair passed "
+                "it; the scene may hold no such place"]
+    failing = {k[len("pairs_failing_"):]: v for k, v in st.items()
+               if k.startswith("pairs_failing_") and v}
+    worst = ", ".join(f"{k} {v:,}" for k, v in sorted(failing.items(), key=lambda kv: -kv[1]))
+    return [f"no place found: {st['pairs_accepted_by_score']:,} pairs scored high enough but "
+            f"the placement tests rejected them ({worst or 'collision'}); the scene may hold "
+            "no such place (--skip-test NAME shows what a test rejects)"]
 
 
 def _filtered(scene: Scene, tensor, settings: DetectSettings, test_idx) -> np.ndarray:
