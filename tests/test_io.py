@@ -3,7 +3,7 @@ import pytest
 import trimesh
 
 import interaction_tensor as it
-from interaction_tensor.geometry.files import Gathered, write_json, write_ply_points
+from interaction_tensor.geometry.files import write_json, write_ply_points
 from interaction_tensor.geometry.load import load_geometry
 
 
@@ -98,16 +98,14 @@ def test_degenerate_geometry_is_rejected(tmp_path):
         it.validate_geometry(line, min_points=3)
 
 
-def test_write_json_writes_gathered_columns_as_their_arrays(tmp_path):
-    """A Gathered column (a block-wise view of a big array) is written exactly as
-    the gathered array would be, a block at a time, without being gathered whole."""
+def test_write_json_writes_long_arrays_block_by_block_as_json_lists(tmp_path):
+    """A NumPy array longer than a block is written as the one JSON list it is (floats to 6
+    decimals), within the indented document."""
     import json
-
 
     rng = np.random.default_rng(3)
     base = rng.random(250_003)
-    index = np.sort(rng.choice(len(base), 230_001, replace=False)).astype(np.int32)
-    write_json(tmp_path / "a.json", {"g": Gathered(base, index), "n": 2})
-    write_json(tmp_path / "b.json", {"g": base[index], "n": 2})
-    assert (tmp_path / "a.json").read_text() == (tmp_path / "b.json").read_text()
-    assert len(json.loads((tmp_path / "a.json").read_text())["g"]) == len(index)
+    write_json(tmp_path / "a.json", {"g": base, "n": 2, "nested": [np.arange(3)]})
+    doc = json.loads((tmp_path / "a.json").read_text())
+    assert doc["n"] == 2 and doc["nested"] == [[0, 1, 2]]
+    np.testing.assert_allclose(doc["g"], np.round(base, 6), atol=0)

@@ -140,6 +140,8 @@ import functools
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from interaction_tensor import affordances
@@ -189,7 +191,7 @@ class JudgeSettings:
     sink_sectors: int = 33                     # of 36 (10 degrees each)
     loop_fraction: float = 0.85
     loop_min_angle: float = 30.0
-    fit_ring: tuple = (0.01, 0.01)             # beyond the loop, beyond the object
+    fit_margin: float = 0.01                   # past the loop's inner radius
     fit_slab: float = 0.015
     fit_reach: float = 0.30
     fit_min_samples: int = 2
@@ -341,12 +343,9 @@ class Judge:
                          axis / np.linalg.norm(axis))
             self.loop_inner = float(inner)
             self.loop_closed = self._loop_closed()
-            # a strap (closed below by its object) cannot be put round what goes on
-            # sideways; a hook's gap lets an edge in
-            self.loop_is_closed = bool(np.isfinite(self.loop_closed[1:17]).all())
-        # the bottom of what hangs (hanging): its samples within free_band of its lowest
-        self.hanging_part = self.samples[self.samples[:, 2]
-                                         <= self.samples[:, 2].min() + st.free_band]
+        if "free" in self.tests:        # the bottom of what hangs: within free_band of its lowest
+            self.hanging_part = self.samples[self.samples[:, 2]
+                                             <= self.samples[:, 2].min() + st.free_band]
         s = self.support_point
         # columns (training frame: x-y box, z range) the astride and legroom tests look in
         self.astride_column = ((s[0] + st.astride_ahead[0], s[0] + st.astride_ahead[1]),
@@ -466,15 +465,12 @@ class Judge:
     def _fits(self, scene: JudgeScene, rot, t) -> bool:
         """Whether what passes through the loop fits inside it. The scene's surface crossing
         the loop's plane (samples within a spacing of it) is split into connected pieces;
-        each piece that reaches into the loop's opening must end within ``fit_ring[0]`` of
+        each piece that reaches into the loop's opening must end within ``fit_margin`` of
         it wherever the object itself goes on around the opening (:meth:`_loop_closed`): a
         rail, a rod, a peg or a tap's spout lies inside a hook; a shelf board, a desk top
         or a counter's lip goes on sideways through the hook's wire or the bag's strap,
         which cannot be put round it (and which the collision test misses where the wire or
         the strap is thinner than its tolerance)."""
-        from scipy.sparse import coo_matrix
-        from scipy.sparse.csgraph import connected_components
-
         st = self.settings
         centre, axis, up, side = self._loop_frame()
         c = rot @ centre + t
@@ -492,7 +488,7 @@ class Judge:
         _, label = connected_components(graph, directed=False)
         through = np.isin(label, np.unique(label[inside]))
         reach = self.loop_closed[_bins(x[through], z[through])]     # inf: open
-        out = np.isfinite(reach) & (r[through] > self.loop_inner + st.fit_ring[0])
+        out = np.isfinite(reach) & (r[through] > self.loop_inner + st.fit_margin)
         return int(out.sum()) < st.fit_min_samples
 
     def _free(self, scene: JudgeScene, rot, t) -> bool:

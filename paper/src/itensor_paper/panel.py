@@ -302,22 +302,25 @@ def judge_poses(poses, scenes_dir, objects_dir=None, log=None) -> dict:
     return out
 
 
+def _tally(items, judged: dict) -> dict:
+    """Of ``items`` (poses the judge judged), those the panel decided (a majority): how
+    many, on how many the judge agrees, that share (%), and how many each calls valid."""
+    decided = [p for p in items if p.majority is not None]
+    agree = sum(judged[p.id] == p.majority for p in decided)
+    return {"poses": len(decided), "agree": agree,
+            "agreement": round(100.0 * agree / len(decided), 1) if decided else None,
+            "panel_valid": sum(bool(p.majority) for p in decided),
+            "judge_valid": sum(bool(judged[p.id]) for p in decided)}
+
+
 def agreement(poses, judged: dict, held_out_only: bool = True) -> list:
     """Per affordance (and overall): how many poses the panel decided (a majority), on how
     many of them the judge agrees, and that share in %. ``judged`` maps a pose's id to the
     judge's verdict (True: valid)."""
-    rows, total = [], [0, 0]
-    for aff in affordances.names():
-        items = [p for p in poses if p.affordance == aff and p.majority is not None
-                 and (p.held_out or not held_out_only) and p.id in judged]
-        agree = sum(judged[p.id] == p.majority for p in items)
-        rows.append({"affordance": aff, "poses": len(items), "agree": agree,
-                     "agreement": round(100.0 * agree / len(items), 1) if items else None})
-        total[0] += len(items)
-        total[1] += agree
-    rows.append({"affordance": "all", "poses": total[0], "agree": total[1],
-                 "agreement": round(100.0 * total[1] / total[0], 1) if total[0] else None})
-    return rows
+    mine = [p for p in poses if (p.held_out or not held_out_only) and p.id in judged]
+    rows = [{"affordance": aff, **_tally([p for p in mine if p.affordance == aff], judged)}
+            for aff in affordances.names()]
+    return rows + [{"affordance": "all", **_tally(mine, judged)}]
 
 
 def answers_from(path) -> dict:
@@ -360,22 +363,14 @@ def rater_agreement(poses) -> float | None:
 
 def agreement_rows(poses, judged: dict) -> list:
     """Per affordance and split (``development``: the poses the judge's rules were fixed
-    on; ``held-out``: the others): poses with a majority, on how many the judge agrees,
-    that share (%), how many the panel and the judge call valid, and how often two raters
-    agree (%)."""
+    on; ``held-out``: the others): :func:`_tally`'s counts and how often two raters agree
+    (%)."""
     rows = []
     for aff in affordances.names():
         for split, held in (("development", False), ("held-out", True)):
             items = [p for p in poses if p.affordance == aff and p.held_out == held
                      and p.id in judged]
-            decided = [p for p in items if p.majority is not None]
-            agree = sum(judged[p.id] == p.majority for p in decided)
-            rows.append({"affordance": aff, "split": split, "poses": len(decided),
-                         "agree": agree,
-                         "agreement": round(100.0 * agree / len(decided), 1) if decided
-                         else None,
-                         "panel_valid": sum(bool(p.majority) for p in decided),
-                         "judge_valid": sum(judged[p.id] for p in decided),
+            rows.append({"affordance": aff, "split": split, **_tally(items, judged),
                          "raters_agree": rater_agreement(items)})
     return rows
 

@@ -214,8 +214,8 @@ def _umask() -> int:
 
 class Gathered:
     """``base[index]`` without gathering it: indexing (``g[i]``, ``g[a:b]``) gathers only the
-    entries asked for, so a column of a million accepted pairs is written or searched a block
-    at a time (:func:`write_json` writes it as an array)."""
+    entries asked for, so a column of a million accepted pairs is searched a block at a
+    time."""
 
     def __init__(self, base: np.ndarray, index: np.ndarray):
         self.base, self.index = base, index
@@ -230,15 +230,14 @@ class Gathered:
 def write_json(path, obj) -> None:
     """Write ``obj`` as indented JSON, atomically.
 
-    NumPy arrays (and :class:`Gathered` columns) in ``obj`` are written as one-line JSON
-    lists, a block at a time (floats rounded to 6 decimals), so that a million accepted pairs
-    cost no million Python objects.
+    NumPy arrays in ``obj`` are written as one-line JSON lists, a block at a time (floats
+    rounded to 6 decimals), so that a long array costs no million Python objects at once.
     """
     arrays = []
 
     def swap(o):
-        if isinstance(o, (np.ndarray, Gathered)):
-            arrays.append(o.ravel() if isinstance(o, np.ndarray) else o)
+        if isinstance(o, np.ndarray):
+            arrays.append(o.ravel())
             return f"@@itensor-array-{len(arrays) - 1}@@"
         if isinstance(o, dict):
             return {k: swap(v) for k, v in o.items()}
