@@ -11,6 +11,7 @@ from interaction_tensor.engine import backends
 from interaction_tensor.engine import numba_backend as kernels
 from interaction_tensor.engine.backends import (
     CACHE_AUTO_FRACTION,
+    CACHE_COLD_PAIRS,
     cache_pays,
     pairs_of,
     spatial_order,
@@ -103,13 +104,19 @@ def test_detection_with_the_cache_decides_alike(monkeypatch):
     assert budgets == [kernels.CACHE_BYTES]
 
 
-def test_auto_cache_follows_the_test_point_density():
+def test_auto_cache_follows_the_test_point_density(monkeypatch):
 
     assert Engine().neighbour_cache is None
-    assert cache_pays(None, 0.3) and cache_pays(None, CACHE_AUTO_FRACTION)
-    assert not cache_pays(None, 0.05)
-    assert cache_pays(True, 0.001)
-    assert not cache_pays(False, 1.0)
+    monkeypatch.setattr(backends, "cache_kernels_ready", lambda: True)
+    assert cache_pays(None, 0.3, 10) and cache_pays(None, CACHE_AUTO_FRACTION, 10)
+    assert not cache_pays(None, 0.05, CACHE_COLD_PAIRS)
+    assert cache_pays(True, 0.001, 10)
+    assert not cache_pays(False, 1.0, CACHE_COLD_PAIRS)
+    # never compiled on this machine: only a search big enough to pay for compiling them
+    monkeypatch.setattr(backends, "cache_kernels_ready", lambda: False)
+    assert not cache_pays(None, 0.3, CACHE_COLD_PAIRS - 1)
+    assert cache_pays(None, 0.3, CACHE_COLD_PAIRS)
+    assert cache_pays(True, 0.3, 10)
 
 
 def test_spatial_order_keeps_each_candidate_whole():

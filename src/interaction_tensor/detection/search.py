@@ -62,8 +62,9 @@ class Engine:
         the pairs that pass them are scored. Score-first keeps the partial score of every
         pair, which a ranking of rejected pairs (the evaluation's worst 5) starts from.
     neighbour_cache : the Numba backend's neighbour cache: None where the test points are
-        dense (dropped after the search), True always (kept on the scene's grid for later
-        searches of the same scene), False never
+        dense and its kernels are compiled or worth compiling (``cache_pays``; dropped after
+        the search), True always (kept on the scene's grid for later searches of the same
+        scene), False never
     collision_max_tests : exact collision tests one ranking may make; a pose left untested
         when they run out is not predicted
     batch_size : candidates scored per batch (bounds memory; a progress-bar step)
@@ -319,7 +320,8 @@ def detect_many(scene: Scene, tensors: list, settings: DetectSettings | None = N
     timings["index"] = time.perf_counter() - t1
     label = tensors[0].affordance if len(tensors) == 1 else f"{len(tensors)} affordances"
     use_cache = (backend.name == "numba"
-                 and cache_pays(engine.neighbour_cache, len(test_idx) / max(len(scene), 1)))
+                 and cache_pays(engine.neighbour_cache, len(test_idx) / max(len(scene), 1),
+                                sum(len(pp) for pp in pp_list)))
     if use_cache:
         prefetch_cache_kernels()
     cache = dict(cache=use_cache, cache_bytes=cache_budget(len(scene), engine.neighbour_cache),

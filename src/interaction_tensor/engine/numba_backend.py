@@ -28,7 +28,7 @@ PARALLEL_CHUNK = 64
 #: :func:`score_jobs` without a ``cache`` argument scores through the :class:`NeighbourCache`
 #: (same results). Off: building it costs more than it saves on scattered queries
 #: (benchmarks/kernel_speed.py: 0.9x on 3,000 random kitchen5 candidates, 0.4x on
-#: living-room4; 1.8x and 5.9x once built); :func:`detect.cache_pays` turns it on where test
+#: living-room4; 1.8x and 5.9x once built); :func:`backends.cache_pays` turns it on where test
 #: points are dense (benchmarks/run.py: 1.68-1.78x on kitchen5 at 30 %, 2.34-2.65x on living-room4;
 #: sitting on the whole of living-room4 at the defaults: 4.47x).
 NEIGHBOUR_CACHE = False
