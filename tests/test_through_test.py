@@ -143,13 +143,17 @@ def test_detection_spends_the_exact_tests_on_hooks_with_something_through(hangin
     # the rail holds fewer than 5 hangers a suppression radius apart)
     assert off.stats["through_test"] == "on" and off.stats["pairs_with_nothing_through"] > 0
     assert det.stats["pairs_with_nothing_through"] < off.stats["pairs_with_nothing_through"]
-    # the same predictions, each with something through the hook: the best two on the rail
-    # (then hooks over the wall's ends and the cabinet's corner edge)
+    # the same predictions, each with something through the hook: the best on the rail
+    # (then hooks over the wall's ends and the cabinet's corner edge, other places)
     collider, body = MeshCollider(*room.mesh), tensor.through_body()
     for d in (det, off):
         assert d.predictions and all(collider.collides(body, p.pose) for p in d.predictions)
-        assert all(abs(p.position[0]) < 0.05 for p in d.predictions[:2])
-    assert [p.point_index for p in det.predictions] == [p.point_index for p in off.predictions]
+        assert abs(d.predictions[0].position[0]) < 0.05
+        assert len({p.place for p in d.predictions}) == len(d.predictions)
+    # the same places, as far as the exact tests allowed go: without the placement test they
+    # are spent on hooks with nothing through sooner, so it may find fewer
+    got, without = ([p.point_index for p in d.predictions] for d in (det, off))
+    assert len(without) >= 3 and got[:len(without)] == without
 
 
 def test_the_cli_turns_the_test_off():

@@ -271,10 +271,17 @@ def _report(args, result, outdir) -> None:
     if st["backend"] == "torch" and st["device"] == "cpu":
         print("itensor: note: no CUDA device, so the torch backend ran on the CPU, where the "
               "default Numba backend is much faster", file=sys.stderr)
+    places = result.places
+    if places:
+        _say(args, f"{len(places)} place{'s' if len(places) != 1 else ''} found; the best "
+                   f"pose of each of the best {len(result.predictions)}:")
     for rank, p in enumerate(result.predictions[:10], 1):
         x, y, z = p.position
+        size = " x ".join(f"{v:.2f}" for v in (places[p.place].hi - places[p.place].lo)[:2]) \
+            if 0 <= p.place < len(places) else "?"
         _say(args, f"  #{rank:<2d} score {p.score:.3f} at ({x:.3f}, {y:.3f}, {z:.3f}) m, "
-                   f"orientation {p.orientation_index} ({p.angle * 180 / 3.141592653589793:.0f} deg)")
+                   f"orientation {p.orientation_index} ({p.angle * 180 / 3.141592653589793:.0f} deg)"
+                   f", place {p.place} ({size} m)")
     _say(args, f"wrote {outdir}/predictions.json, heatmap.ply, predictions.glb, top/ "
                f"({len(result.predictions)} posed objects)")
 
@@ -290,6 +297,7 @@ def summary(result, outdir) -> dict:
             "pairs_scored": st["pairs_scored"], "pairs_tested": st["pairs_tested"],
             "pairs_accepted": st["pairs_accepted"],
             "pairs_accepted_by_score": st["pairs_accepted_by_score"],
+            "places": st.get("places", 0),
             **{k: st[k] for k in ("pairs_failing_clearance", "pairs_failing_contact",
                                   "pairs_failing_interior", "pairs_failing_ground", "pairs_failing_feet",
                                   "pairs_failing_straddle", "pairs_failing_mount",
@@ -298,7 +306,7 @@ def summary(result, outdir) -> dict:
             "candidates_per_second": st.get("candidates_per_second"),
             "pairs_per_second": st.get("pairs_per_second"), "seconds": st["seconds"],
             "predictions": [{"score": p.score, "position": p.position.tolist(),
-                             "angle": p.angle} for p in result.predictions]}
+                             "angle": p.angle, "place": p.place} for p in result.predictions]}
 
 
 def cmd_detect(args) -> int:

@@ -12,6 +12,7 @@ import numpy as np
 
 from interaction_tensor.capture.outputs import write_input_frame_outputs
 from interaction_tensor.descriptor.tensor import InteractionTensor
+from interaction_tensor.detection.places import Prediction
 from interaction_tensor.engine.scoring import PairScores
 from interaction_tensor.geometry.files import atomic_dir, output_path
 from interaction_tensor.geometry.scene import Scene
@@ -51,7 +52,9 @@ class Detection:
     placement : (P,) int8, the outcome of the placement tests (see the attribute)
     heat : (N,) per scene point: best accepted score near it (0 where none)
     accepted_count : (N,) accepted orientations at each scene point
-    predictions : top-k after suppression, best first
+    predictions : the top k, best first: the best pose of each of the best places
+    places : :class:`~.places.Place` list, best first: the accepted pairs grouped into
+        connected regions (a table top, a shelf, a rail)
     stats : counts and seconds per stage
     """
 
@@ -92,11 +95,34 @@ class Detection:
     #: what a user should know about this result, one line each: an empty result says why
     #: and what to do (:func:`~.search.empty_result_warnings`)
     warnings: list = field(default_factory=list)
+    places: list = field(default_factory=list)
+    #: (A,) the place of each accepted pair (:attr:`accepted` order); None before ranking
+    accepted_place: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def accepted(self) -> np.ndarray:
         """Indices into the pair arrays of accepted pairs (int32 when they fit)."""
         return accepted_indices(self.pairs.accepted)
+
+    def prediction(self, pair: int, place: int = -1) -> Prediction:
+        """The :class:`~.places.Prediction` of pair ``pair`` (an index into the pair arrays)."""
+        o, p = int(self.pair_orientation[pair]), int(self.pair_point[pair])
+        angle = 2 * np.pi * o / self.settings.n_orientations
+        position = self.scene.points[p]
+        return Prediction(position=position.copy(), orientation_index=o, angle=float(angle),
+                          score=float(self.pairs.score[pair]),
+                          pose=self.tensor.pose(position, angle), point_index=p, place=place)
+
+    def place_predictions(self, place: int, limit: int | None = None) -> list:
+        """Every accepted pose of place ``place`` (an index into :attr:`places`), best
+        first (at most ``limit``), whether or not the collision test was asked about it."""
+        if self.accepted_place is None or not 0 <= place < len(self.places):
+            raise IndexError(f"place {place} out of range: this result has "
+                             f"{len(self.places)} places")
+        acc = self.accepted
+        mine = acc[self.accepted_place == place]
+        mine = mine[np.argsort(-self.pairs.score[mine], kind="stable")][:limit]
+        return [self.prediction(int(i), place) for i in mine]
 
     # ------------------------------------------------------------ the top predictions as arrays
     @property
@@ -127,7 +153,8 @@ class Detection:
     def __repr__(self) -> str:
         best = f", best {self.predictions[0].score:.3f}" if self.predictions else ""
         return (f"<Detection {self.tensor.affordance!r} in {self.scene.source}: "
-                f"{len(self.predictions)} predictions{best}; {int(self.pairs.accepted.sum())} of "
+                f"{len(self.predictions)} predictions{best}, {len(self.places)} places; "
+                f"{int(self.pairs.accepted.sum())} of "
                 f"{len(self.pair_point)} pairs accepted at threshold {self.threshold:.3f}>")
 
     # ------------------------------------------------------------ outputs

@@ -15,8 +15,9 @@ import numpy as np
 
 from interaction_tensor.descriptor.tensor import InteractionTensor
 from interaction_tensor.detection.places import (
-    Prediction,
+    group_places,
     heat_map,
+    place_cell,
     suppression_radius,
     top_k,
 )
@@ -154,17 +155,17 @@ def _finish(scene, tensor, settings, engine, threshold, test_idx, cand, pair_poi
     radius = suppression_radius(tensor, settings)
     acc = accepted_indices(pairs.accepted)
     check = collision_check(det)
-    picks = (top_k(scene.points, pairs.score[acc], settings.top_k, radius,
-                   index=pair_point[acc],
-                   accept=(lambda i: check.free(int(acc[i]))) if check.on else None)
-             if engine.rank else [])
-    for i in picks:
-        o, p = int(pair_orient[acc[i]]), int(pair_point[acc[i]])
-        angle = 2 * np.pi * o / n_o
-        det.predictions.append(Prediction(position=scene.points[p].copy(), orientation_index=o,
-                                          angle=float(angle), score=float(pairs.score[acc[i]]),
-                                          pose=tensor.pose(scene.points[p], angle),
-                                          point_index=p))
+    picks = []
+    if engine.rank:
+        # accepted pairs grouped into places; the top k: the best pose of each of the best
+        # places (one that passes the collision test), the suppression radius apart
+        cell = place_cell(scene.spacing, settings.sample_fraction)
+        det.accepted_place, det.places = group_places(scene.points, pair_point, pairs.score,
+                                                      acc, cell, tensor.affordance_normal)
+        picks = top_k(scene.points, pairs.score[acc], settings.top_k, radius,
+                      index=pair_point[acc], group=det.accepted_place,
+                      accept=(lambda i: check.free(int(acc[i]))) if check.on else None)
+    det.predictions = [det.prediction(int(acc[i]), int(det.accepted_place[i])) for i in picks]
     timings["collision"] = check.seconds
     det.heat, det.accepted_count = heat_map(scene, pair_point, pairs.score, pairs.accepted)
     timings["predictions"] = time.perf_counter() - t3
@@ -188,6 +189,7 @@ def _finish(scene, tensor, settings, engine, threshold, test_idx, cand, pair_poi
         "pairs_tested": int((outcome != UNTESTED).sum()),
         "pairs_accepted": int(pairs.accepted.sum()),
         "pairs_accepted_by_score": int(score_acc.sum()),
+        "places": len(det.places),
         "pairs_failing_clearance": failing(FAILS_CLEARANCE),
         "pairs_failing_contact": failing(FAILS_CONTACT),
         "pairs_failing_interior": failing(FAILS_INTERIOR),

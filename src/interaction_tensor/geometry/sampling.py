@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from interaction_tensor.errors import InputError
@@ -16,7 +18,7 @@ def mesh_area(geometry: Geometry) -> float:
     return float(trimesh.triangles.area(geometry.vertices[geometry.faces]).sum())
 
 
-def sample_mesh(geometry: Geometry, count: int, seed, face_mask=None):
+def sample_mesh(geometry: Geometry, count: int, seed, face_mask=None, with_faces: bool = False):
     """Area-uniform random samples on a mesh, with their face normals.
 
     Parameters
@@ -30,6 +32,8 @@ def sample_mesh(geometry: Geometry, count: int, seed, face_mask=None):
     -------
     points : (count, 3) float64, metres
     normals : (count, 3) float64, unit face normals (orientation as the file's winding)
+    faces : (count,) int64, with ``with_faces``: the face of each sample (an index into
+        ``geometry.faces``)
     """
     import trimesh
 
@@ -39,7 +43,69 @@ def sample_mesh(geometry: Geometry, count: int, seed, face_mask=None):
     mesh = trimesh.Trimesh(geometry.vertices, faces, process=False)
     points, face_index = trimesh.sample.sample_surface(mesh, int(count), seed=seed)
     normals = np.asarray(mesh.face_normals)[face_index]
-    return points, normals
+    if not with_faces:
+        return points, normals
+    index = np.arange(len(geometry.faces)) if face_mask is None else np.flatnonzero(face_mask)
+    return points, normals, index[face_index]
+
+
+#: How far (m) along its normal a sample is lifted before it is asked whether a closed part of
+#: the mesh holds it: off its own surface, so that a sample on a face that another part's
+#: face covers (a table top under a box standing on it) counts as inside that part.
+BURIED_LIFT = 1e-3
+
+
+def buried_samples(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
+                   normals: np.ndarray, face_index: np.ndarray) -> np.ndarray:
+    """(N,) bool: the samples of a mesh that lie inside a closed part of it other than their
+    own (a table top under a box standing on it, a floor under a wardrobe): no object can
+    reach them. A part is a connected set of faces whose every edge two of its faces share;
+    a sample inside one (generalised winding number of the part at the sample lifted by
+    :data:`BURIED_LIFT` along its normal, at least 0.5 in magnitude) is buried. Open parts (a
+    scanned room's single surface) bury nothing. Only the samples inside a part's bounding
+    box are tested."""
+    import trimesh
+
+    faces = np.asarray(faces, np.int64)
+    buried = np.zeros(len(points), bool)
+    if len(faces) < 8:
+        return buried
+    mesh = trimesh.Trimesh(np.asarray(vertices, np.float64), faces, process=False)
+    mesh.merge_vertices()                                 # shared corners join faces
+    merged = np.asarray(mesh.faces)
+    adj = np.asarray(mesh.face_adjacency)
+    graph = coo_matrix((np.ones(len(adj), np.int8), (adj[:, 0], adj[:, 1])),
+                       shape=(len(merged), len(merged)))
+    n_parts, part = connected_components(graph, directed=False)
+    if n_parts < 2:
+        return buried
+    # closed parts: every edge of the part used by exactly two of its faces
+    edges = np.sort(merged[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    edge_part = np.repeat(part, 3)
+    key = np.column_stack([edge_part, edges])
+    uniq, counts = np.unique(key, axis=0, return_counts=True)
+    open_part = np.zeros(n_parts, bool)
+    open_part[uniq[counts != 2, 0]] = True
+    size = np.bincount(part, minlength=n_parts)
+    tri = np.asarray(mesh.vertices)[merged]
+    lo = np.full((n_parts, 3), np.inf)
+    hi = np.full((n_parts, 3), -np.inf)
+    np.minimum.at(lo, part, tri.min(axis=1))
+    np.maximum.at(hi, part, tri.max(axis=1))
+    lifted = points + BURIED_LIFT * normals
+    sample_part = part[face_index]
+    tree = cKDTree(lifted)
+    for c in np.flatnonzero(~open_part & (size >= 4)):          # closed parts, one at a time
+        centre, reach = (lo[c] + hi[c]) / 2, np.linalg.norm(hi[c] - lo[c]) / 2
+        near = np.asarray(tree.query_ball_point(centre, reach), np.int64)
+        if not len(near):
+            continue
+        near = near[(sample_part[near] != c) & ~buried[near]
+                    & (lifted[near] >= lo[c]).all(axis=1) & (lifted[near] <= hi[c]).all(axis=1)]
+        if len(near):
+            w = winding_numbers(lifted[near], mesh.vertices, merged[part == c])
+            buried[near[np.abs(w) >= 0.5]] = True
+    return buried
 
 
 def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = None,

@@ -14,6 +14,7 @@ from interaction_tensor.geometry.collision import MeshCollider
 from interaction_tensor.geometry.core import Geometry, validate_geometry
 from interaction_tensor.geometry.grid import build_grid, grid_cells
 from interaction_tensor.geometry.sampling import (
+    buried_samples,
     estimate_normals,
     mean_spacing,
     mesh_area,
@@ -344,10 +345,18 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
     if geometry.is_mesh:
         count = mesh_samples(geometry, spacing, max_points, face_mask)
         check_memory(count, geometry.source, pairs_per_point=pairs_per_point)
-        points, normals = spatially_sorted(*sample_mesh(geometry, count, seed,
-                                                        face_mask=face_mask), spacing)
-        return Scene(points, normals, spacing, geometry.source, sampled=True,
-                     notes=list(geometry.notes),
+        points, normals, faces = sample_mesh(geometry, count, seed, face_mask=face_mask,
+                                             with_faces=True)
+        notes = list(geometry.notes)
+        buried = buried_samples(geometry.vertices, geometry.faces, points, normals, faces)
+        if buried.any():
+            keep = ~buried
+            points, normals = points[keep], normals[keep]
+            notes.append(f"{int(buried.sum()):,} samples inside closed parts of the mesh "
+                         "dropped (a surface another part covers: nothing can reach it)")
+        del faces
+        points, normals = spatially_sorted(points, normals, spacing)
+        return Scene(points, normals, spacing, geometry.source, sampled=True, notes=notes,
                      mesh=(np.asarray(geometry.vertices, np.float64),
                            np.asarray(geometry.faces, np.int64)))
     points = geometry.vertices

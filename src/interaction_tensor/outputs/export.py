@@ -152,19 +152,27 @@ def write_glb(detection, path) -> None:
 #: The file of every accepted pair (:func:`write_accepted`), beside ``predictions.json``.
 ACCEPTED_FILE = "accepted.npz"
 #: Its arrays, one entry per accepted (test point, orientation) pair.
-ACCEPTED_COLUMNS = ("point_index", "orientation_index", "score", "comparisons_to_decision")
+ACCEPTED_COLUMNS = ("point_index", "orientation_index", "score", "comparisons_to_decision",
+                    "place")
+#: Places listed in ``predictions.json`` at most (the best ones; every accepted pair's place
+#: is in ``accepted.npz``): keeps the file small whatever the scene.
+MAX_PLACES_LISTED = 1000
 
 
 def write_accepted(path, detection, accepted) -> None:
     """``accepted.npz``: every accepted pair as the arrays of :data:`ACCEPTED_COLUMNS`
     (``point_index`` into the scene's points, int32; ``orientation_index``, int16;
-    ``score``, float32; ``comparisons_to_decision``, int32), compressed, atomically; read it
-    with ``numpy.load``, no pickle."""
+    ``score``, float32; ``comparisons_to_decision``, int32; ``place``, int32, the index of
+    its place, -1 where the result was not ranked), compressed, atomically; read it with
+    ``numpy.load``, no pickle."""
     det = detection
+    place = (det.accepted_place if det.accepted_place is not None
+             else np.full(len(accepted), -1))
     arrays = {"point_index": det.pair_point[accepted].astype(np.int32),
               "orientation_index": det.pair_orientation[accepted].astype(np.int16),
               "score": det.pairs.score[accepted].astype(np.float32),
-              "comparisons_to_decision": det.pairs.decided_at[accepted].astype(np.int32)}
+              "comparisons_to_decision": det.pairs.decided_at[accepted].astype(np.int32),
+              "place": np.asarray(place).astype(np.int32)}
     buf = io.BytesIO()
     np.savez_compressed(buf, **arrays)
     with atomic_path(path) as tmp:
@@ -204,6 +212,7 @@ def export(detection, outdir, scene_name: str | None = None,
         "parameters": {**det.settings.to_dict(), "threshold_used": det.threshold},
         "pose_convention": "x_scene = pose @ [x_query_training_frame, 1]; angle about +Z",
         "predictions": [p.to_dict() for p in det.predictions],
+        "places": [p.to_dict() for p in det.places[:MAX_PLACES_LISTED]],
         "accepted": accepted,
         "stats": det.stats,
     }

@@ -119,6 +119,7 @@ def build_data(outdir, max_points: int = MAX_POINTS, seed: int = 0) -> dict:
         desc_note = f"descriptor {od.doc.get('descriptor')!r} not found"
 
     predictions, meshes = [], []
+    places = {p["index"]: p for p in od.doc.get("places", [])}
     if tensor is not None:
         meshes.append(_mesh(tensor.query_vertices,
                             tensor.query_faces if tensor.query_is_mesh else None,
@@ -130,6 +131,9 @@ def build_data(outdir, max_points: int = MAX_POINTS, seed: int = 0) -> dict:
         entry = {"rank": rank, "score": float(p["score"]), "position": list(p["position"]),
                  "angle": float(p.get("angle", 0.0)),
                  "orientation_index": int(p.get("orientation_index", 0))}
+        place = places.get(p.get("place", -1))
+        if place is not None:
+            entry["place"] = {k: place[k] for k in ("index", "pairs", "lo", "hi")}
         obj = od.objects[rank - 1]
         if tensor is not None:
             entry.update(mesh=0, pose=np.asarray(p["pose"], float).tolist())
@@ -188,7 +192,7 @@ aside{background:#fff;border:1px solid #ddd;border-radius:4px;overflow:auto;padd
 aside h2{font-size:14px;margin:4px 0 8px} ol{list-style:none;padding:0;margin:0}
 li.prediction{padding:5px 8px;border:1px solid #eee;border-radius:4px;margin-bottom:4px;cursor:pointer}
 li.prediction:hover{background:#f3f0ff} li.prediction.selected{background:#ffe3fa;border-color:#e040c0}
-.score{float:right;font-variant-numeric:tabular-nums} .where{color:#666;font-size:12px}
+.score{float:right;font-variant-numeric:tabular-nums} .where,.place{color:#666;font-size:12px}
 .controls{font-size:12px;padding:4px 10px;color:#555} button{font-size:12px}
 #errors{white-space:pre-wrap;color:#b00;font-size:12px}
 """

@@ -28,6 +28,8 @@ from interaction_tensor.outputs.export import colormap
 from interaction_tensor.outputs.raster import Canvas, frame_points
 
 OBJECT_COLOR = (230, 60, 40)
+#: The outline of each predicted place (the box round its accepted test points).
+PLACE_COLOR = (15, 15, 15)
 PANEL = (640, 480)
 
 
@@ -63,7 +65,31 @@ class Outdir:
         scene = Path(str(self.doc.get("scene", "scene"))).name
         n = len(self.predictions)
         best = f", best score {self.predictions[0]['score']:.2f}" if n else ", none accepted"
-        return f"{self.doc.get('affordance', 'interaction')} in {scene}: {n} predictions{best}"
+        places = self.doc.get("stats", {}).get("places")
+        found = f" of {places} places" if places is not None else ""
+        return (f"{self.doc.get('affordance', 'interaction')} in {scene}: {n} "
+                f"predictions{found}{best}")
+
+    def place_boxes(self, lift: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """The 12 edges of the box round the place of each prediction (``predictions.json``'s
+        places), its top raised by ``lift`` m (above the surface drawn), as (E, 3) starts and
+        ends; none for a result without places."""
+        places = {p["index"]: p for p in self.doc.get("places", [])}
+        starts, ends = [], []
+        for pred in self.predictions:
+            place = places.get(pred.get("place", -1))
+            if place is None:
+                continue
+            lo, hi = np.asarray(place["lo"], float), np.asarray(place["hi"], float)
+            hi[2] += lift
+            corner = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                               for z in (lo[2], hi[2])])
+            for i in range(8):
+                for j in range(i + 1, 8):
+                    if bin(i ^ j).count("1") == 1:      # corners one coordinate apart
+                        starts.append(corner[i])
+                        ends.append(corner[j])
+        return np.asarray(starts, float).reshape(-1, 3), np.asarray(ends, float).reshape(-1, 3)
 
 
 def load_outdir(outdir, top_k: int | None = None) -> Outdir:
@@ -235,7 +261,8 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
     ``max_closeups`` close-ups, one per group of nearby predictions, each from the azimuth
     that sees most of them, cutting away what stands between the camera and the group. The
     scene is coloured by the heat map (grey: not accepted) with a colour bar; the query
-    object is drawn at each of the ``top_k`` predictions and labelled with its rank.
+    object is drawn at each of the ``top_k`` predictions and labelled with its rank, and
+    the place it stands for is outlined (the box round the place's accepted test points).
     """
     t0 = time.perf_counter()
     out_png = None if out_png is None else output_path(out_png, "picture (PNG)")
@@ -295,10 +322,12 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
         ranks = [i + 1 for i in group]
         views.append((cam, "close-up: " + ", ".join(f"#{r}" for r in ranks), ranks))
 
+    box_a, box_b = od.place_boxes(lift=0.5 * spacing)
     panels, captions, labels = [], [], []
     for cam, caption, ranks in views:
         canvas = Canvas(cam, supersample)
         canvas.points(pts[low], colors[low], normals[low], size=size)
+        canvas.lines(box_a, box_b, PLACE_COLOR, width_px=supersample)
         for rank, p, n, verts in obj_samples:
             canvas.points(p, OBJECT_COLOR, n, size=1.7 * diag / 150)
         panels.append(canvas.image())

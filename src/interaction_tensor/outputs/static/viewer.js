@@ -284,8 +284,11 @@
       const li = document.createElement("li");
       li.className = "prediction"; li.dataset.rank = String(p.rank);
       const pos = p.position.map((x) => x.toFixed(2)).join(", ");
+      const place = p.place ? "<div class=place>place " + p.place.index + ": " +
+        [0, 1].map((k) => (p.place.hi[k] - p.place.lo[k]).toFixed(2)).join(" x ") + " m, " +
+        p.place.pairs + " poses</div>" : "";
       li.innerHTML = "<b>#" + p.rank + "</b> <span class=score>" + p.score.toFixed(3) + "</span>" +
-        "<div class=where>(" + pos + ") m, " + Math.round(p.angle * 180 / Math.PI) + "&deg;</div>";
+        "<div class=where>(" + pos + ") m, " + Math.round(p.angle * 180 / Math.PI) + "&deg;</div>" + place;
       li.addEventListener("click", () => select(i));
       list.appendChild(li);
     });

@@ -1,0 +1,129 @@
+"""Places: accepted pairs grouped into connected regions, one prediction per place, and mesh
+samples that nothing can reach left out of the scene."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import interaction_tensor as it
+from interaction_tensor.detection.places import group_places, place_cell, top_k
+from interaction_tensor.examples import demo
+from interaction_tensor.examples.procedural import box_part, parts_mesh
+from interaction_tensor.geometry.core import Geometry
+from interaction_tensor.geometry.sampling import buried_samples, sample_mesh
+
+
+def _patch(rng, lo, hi, z, n):
+    """``n`` random points on the horizontal rectangle ``lo``-``hi`` at height ``z``."""
+    xy = rng.uniform(lo, hi, size=(n, 2))
+    return np.column_stack([xy, np.full(n, z)])
+
+
+def test_places_are_connected_surfaces_apart_in_height_or_across():
+    rng = np.random.default_rng(0)
+    # a floor, a shelf 10 cm above part of it, a table top far away; 1 cm samples, 30 % drawn
+    floor = _patch(rng, (0, 0), (2, 1), 0.0, 6000)
+    shelf = _patch(rng, (0.2, 0.2), (0.8, 0.6), 0.10, 720)
+    table = _patch(rng, (3.0, 0.0), (3.5, 0.5), 0.72, 750)
+    pts = np.vstack([floor, shelf, table])
+    pair_point = np.repeat(np.arange(len(pts)), 2)
+    score = rng.uniform(0.5, 0.9, len(pair_point))
+    score[2 * len(floor) + 2 * len(shelf) + 7] = 0.99          # the best pair: on the table
+    accepted = np.flatnonzero(rng.random(len(pair_point)) < 0.8)
+    cell = place_cell(0.01, 0.3)
+    place, places = group_places(pts, pair_point, score, accepted, cell)
+    assert len(places) == 3
+    assert places[0].score == 0.99 and places[0].centroid[0] > 2.9        # the table first
+    heights = sorted(round(float(p.centroid[2]), 2) for p in places)
+    assert heights == [0.0, 0.1, 0.72]
+    for p in places:
+        mine = accepted[place == p.index]
+        assert p.pairs == len(mine) and p.score == score[mine].max()
+        assert p.points == len(np.unique(pair_point[mine]))
+        assert np.ptp(pts[pair_point[mine], 2]) == 0
+    # the same surfaces seen along another normal: the cells follow the normal
+    turn = pts[:, [2, 0, 1]]
+    place2, places2 = group_places(turn, pair_point, score, accepted, cell, (1.0, 0.0, 0.0))
+    assert len(places2) == 3 and np.array_equal(place2, place)
+
+
+def test_a_gap_wider_than_the_cells_splits_a_surface():
+    rng = np.random.default_rng(1)
+    a = _patch(rng, (0, 0), (0.5, 0.5), 0.4, 800)
+    b = _patch(rng, (0.8, 0), (1.3, 0.5), 0.4, 800)           # 30 cm away, same height
+    pts = np.vstack([a, b])
+    score = rng.uniform(0.5, 0.9, len(pts))
+    place, places = group_places(pts, np.arange(len(pts)), score, np.arange(len(pts)),
+                                 place_cell(0.01, 0.3))
+    assert len(places) == 2
+    assert len(set(place[:800])) == 1 and len(set(place[800:])) == 1
+
+
+def test_top_k_takes_one_pick_per_group():
+    pos = np.array([[0, 0, 0], [0.5, 0, 0], [1.0, 0, 0], [5.0, 0, 0], [6.0, 0, 0]], float)
+    scores = np.array([0.9, 0.8, 0.7, 0.6, 0.5])
+    group = np.array([0, 0, 0, 1, -1])
+    assert top_k(pos, scores, 5, 0.1) == [0, 1, 2, 3, 4]
+    assert top_k(pos, scores, 5, 0.1, group=group) == [0, 3, 4]
+    # a group whose best is refused gives its next best
+    assert top_k(pos, scores, 5, 0.1, group=group, accept=lambda i: i != 0) == [1, 3, 4]
+    # through the gathered path (scene points and point indices)
+    assert top_k(pos, scores, 2, 0.1, index=np.arange(5), group=group) == [0, 3]
+
+
+def test_buried_samples_are_those_another_closed_part_covers():
+    plate = box_part("plate", (0.0, 0.0, -0.01), (1.0, 1.0, 0.02))      # top at z = 0
+    block = box_part("block", (0.0, 0.0, 0.1), (0.2, 0.2, 0.2))         # stands on it
+    mesh = parts_mesh([plate, block])
+    pts, nrm, faces = sample_mesh(mesh, 40000, 0, with_faces=True)
+    buried = buried_samples(mesh.vertices, mesh.faces, pts, nrm, faces)
+    top = np.isclose(pts[:, 2], 0.0) & (nrm[:, 2] > 0.9)
+    under = top & (np.abs(pts[:, :2]) < 0.1 - 1e-6).all(axis=1)
+    clear = top & (np.abs(pts[:, :2]) > 0.1 + 1e-6).any(axis=1)
+    assert under.sum() > 100
+    assert buried[under].all() and not buried[clear].any()
+    assert not buried[pts[:, 2] > 0.01].any()                  # the block's own faces
+    # an open surface (one side of the plate only) buries nothing
+    open_faces = mesh.faces[:len(mesh.faces) // 2][:10]
+    opened = Geometry(mesh.vertices, open_faces)
+    p2, n2, f2 = sample_mesh(opened, 2000, 0, with_faces=True)
+    assert not buried_samples(opened.vertices, opened.faces, p2, n2, f2).any()
+
+
+def test_a_mesh_scene_leaves_out_what_another_part_covers():
+    ex = demo.build()
+    scene = it.load_scene(ex.scene, demo.DEMO_SPACING)
+    assert any("inside closed parts" in note for note in scene.notes)
+    box = next(p for p in ex.scene_parts if p.name == "box-on-dining")
+    lo, hi = np.asarray(box.lo), np.asarray(box.hi)
+    inside = ((scene.points > lo + 1e-3) & (scene.points < hi - 1e-3)).all(axis=1)
+    assert not inside.any()
+    under = ((np.abs(scene.points[:, 2] - lo[2]) < 1e-6)
+             & (scene.points[:, :2] > lo[:2] + 0.01).all(axis=1)
+             & (scene.points[:, :2] < hi[:2] - 0.01).all(axis=1))
+    assert not under.any()
+
+
+@pytest.fixture(scope="module")
+def demo_result():
+    ex = demo.build()
+    tensor = it.train(ex.query, ex.scene_object, "placing-bowl", spacing=demo.DEMO_SPACING)
+    return it.detect(ex.scene, tensor, sample_fraction=0.1)
+
+
+def test_every_pose_of_a_place(demo_result):
+    r = demo_result
+    assert r.places and r.stats["places"] == len(r.places)
+    assert [p.place for p in r.predictions] == list(range(len(r.predictions)))
+    poses = r.place_predictions(1)
+    assert len(poses) == r.places[1].pairs
+    assert poses[0].score == r.places[1].score == r.predictions[1].score
+    assert all(a.score >= b.score for a, b in zip(poses, poses[1:]))
+    assert {p.place for p in poses} == {1}
+    lo, hi = r.places[1].lo, r.places[1].hi
+    assert all(np.all(lo <= p.position) and np.all(p.position <= hi) for p in poses)
+    assert len(r.place_predictions(1, limit=3)) == 3
+    with pytest.raises(IndexError, match="out of range"):
+        r.place_predictions(len(r.places))
+    assert "places" in repr(r) and "Place(0:" in repr(r.places[0])
