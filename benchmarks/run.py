@@ -19,7 +19,8 @@ Cases:
   then, on 1,000 of its candidates, the Numba backend against the exact NumPy reference
   (every keypoint, a cKDTree): the same decisions and the ratio of candidates per second;
 - ``many``: the 8 examples in one pass over kitchen5 against the slowest of them alone;
-- ``demo``: ``itensor demo --render`` with an empty Numba cache (a fresh install) and again;
+- ``demo``: ``itensor demo`` (its picture included) with an empty Numba cache (a fresh
+  install) and again;
 - ``memory``: peak resident memory of ``itensor detect`` on a 2 M-point cloud without normals;
 - ``protocol`` (with ``--protocol``): detection of the paper's 8 examples on its 14 scenes.
 """
@@ -171,7 +172,7 @@ def _child(cmd: list, env=None) -> tuple[float, float]:
 def case_demo() -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         env = dict(os.environ, NUMBA_CACHE_DIR=str(Path(tmp) / "numba"))
-        cmd = [sys.executable, "-m", "interaction_tensor", "demo", "--render", "-q", "-o"]
+        cmd = [sys.executable, "-m", "interaction_tensor", "demo", "-q", "-o"]
         peak1, first = _child(cmd + [str(Path(tmp) / "a")], env)
         peak2, again = _child(cmd + [str(Path(tmp) / "b")], env)
     return {"first_run_s": round(first, 1), "again_s": round(again, 1),
@@ -301,7 +302,7 @@ def markdown(res: dict) -> str:
                   f"{sum(m['alone_s'].values()):.1f} s (one pass {m['ratio_to_sum']}x).", ""]
     if "demo" in res:
         d = res["demo"]
-        lines += ["## The demo (`itensor demo --render`)", "",
+        lines += ["## The demo (`itensor demo`, its picture included)", "",
                   f"First run, with an empty Numba cache (a fresh install): {d['first_run_s']} "
                   f"s; again: {d['again_s']} s; peak memory {d['peak_mb']} MB.", ""]
     if "memory" in res:

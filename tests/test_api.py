@@ -71,6 +71,11 @@ def test_readme_python_snippet_runs_verbatim(files, monkeypatch):
     assert isinstance(result, it.Detection) and len(result.predictions) >= 1
     assert (files / "out" / "predictions.json").is_file()
     assert (files / "out" / "predictions.glb").is_file()
+    assert (files / "out" / "render.png").is_file()                 # the picture by default
+    assert namespace["page"].resolve() == (files / "out" / "index.html").resolve()
+    assert namespace["page"].is_file()
+    every = namespace["every"]
+    assert len(every) == result.places[0].pairs and every[0].score == result.scores[0]
     # the best place is the table top, the other the floor: one bowl each
     _on_the_table_then_the_floor(result)
     assert isinstance(namespace["picture"], trimesh.Scene)

@@ -78,6 +78,14 @@ def test_train_info_detect(files, descriptor):
     assert len(tops) == len(doc["predictions"])
     # no temporary files left behind
     assert not [f for f in out.rglob("*") if ".part" in f.name]
+    # the picture by default, and no picture when asked
+    assert (out / "render.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert "place 0" in proc.stdout and "places found" in proc.stdout
+    bare = files / "det-bare"
+    run("detect", files / "corner.ply", descriptor, "-o", bare, "--top-k", 3,
+        "--sample-fraction", 0.2, "--seed", 4, "--no-render", "-q", check=0)
+    assert not (bare / "render.png").exists()
+    assert (bare / "predictions.json").read_text() != ""
 
 
 def _one_line_error(proc, *words):

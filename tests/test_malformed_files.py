@@ -448,7 +448,8 @@ def test_an_empty_output_path_is_named_before_any_work(corner, tmp_path, capsys,
     write_mesh(tmp_path / "q.ply", q.vertices, q.faces)
     (tmp_path / "det").mkdir()
     assert main(["detect", str(corner / "scene.ply"), str(corner / "corner.npz"), "-o",
-                 str(tmp_path / "det" / "o"), "-q", "--sample-fraction", "0.05"]) == 0
+                 str(tmp_path / "det" / "o"), "-q", "--sample-fraction", "0.05",
+                 "--no-render"]) == 0
     cases = [
         (["train", tmp_path / "q.ply", corner / "scene.ply", "--affordance", "x", "-o", ""],
          "-o/--output is empty; give the descriptor file to write (.npz)"),

@@ -11,7 +11,9 @@ from interaction_tensor.detection.places import group_places, place_cell, top_k
 from interaction_tensor.examples import demo
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.geometry.core import Geometry
-from interaction_tensor.geometry.sampling import buried_samples, sample_mesh
+from interaction_tensor.geometry.sampling import (buried_samples, mean_spacing, mesh_area,
+                                                  sample_mesh)
+from interaction_tensor.geometry.scene import thinned
 
 
 def _patch(rng, lo, hi, z, n):
@@ -127,3 +129,42 @@ def test_every_pose_of_a_place(demo_result):
     with pytest.raises(IndexError, match="out of range"):
         r.place_predictions(len(r.places))
     assert "places" in repr(r) and "Place(0:" in repr(r.places[0])
+
+
+def test_thinning_keeps_one_measured_point_per_cube():
+    rng = np.random.default_rng(2)
+    n = 160_000                                        # a 2 x 2 m plane, 5 mm apart
+    pts = np.column_stack([rng.uniform(0, 2, n), rng.uniform(0, 2, n), np.full(n, 0.3)])
+    keep = thinned(pts, 0.02)
+    assert np.all(np.diff(keep) > 0)
+    cubes = np.floor((pts[keep] - pts.min(axis=0)) / 0.02).astype(int)
+    assert len(np.unique(cubes, axis=0)) == len(keep) == 10_000
+    assert mean_spacing(pts[keep]) == pytest.approx(0.02, rel=0.05)
+    # each kept point is the one of its cube nearest the cube's centre
+    one = np.flatnonzero((np.floor((pts - pts.min(axis=0)) / 0.02) == cubes[0]).all(axis=1))
+    centre = pts.min(axis=0) + (cubes[0] + 0.5) * 0.02
+    assert keep[0] == one[np.argmin(((pts[one] - centre) ** 2).sum(axis=1))]
+
+
+def test_a_dense_cloud_gives_the_places_of_the_mesh():
+    """A room as a 5 mm cloud (an array, no normals) is thinned to the descriptor's 2 cm and
+    gives the places of the same room as a mesh; a cloud at the spacing is kept whole."""
+    parts = [box_part("floor", (0, 0, -0.01), (2.0, 2.0, 0.02)),
+             box_part("top", (0.2, 0.1, 0.735), (0.9, 0.6, 0.03)),
+             box_part("shelf", (-0.6, -0.6, 0.385), (0.5, 0.4, 0.03))]
+    parts += [box_part(f"leg{i}", (0.2 + sx * 0.4, 0.1 + sy * 0.25, 0.36), (0.04, 0.04, 0.72))
+              for i, (sx, sy) in enumerate([(-1, -1), (1, -1), (-1, 1), (1, 1)])]
+    room = parts_mesh(parts)
+    ex = demo.build()
+    tensor = it.train(ex.query, ex.scene_object, "placing-bowl", spacing=demo.DEMO_SPACING)
+    mesh = it.detect(room, tensor)
+    dense = sample_mesh(room, round(mesh_area(room) / 0.005 ** 2), 3)[0]
+    cloud = it.detect(dense, tensor)
+    assert any("thinned from" in n for n in cloud.scene.notes)
+    # (measured in a ball: both faces of a 3 cm top count, so a little under 2 cm)
+    assert 0.65 * demo.DEMO_SPACING < cloud.scene.spacing < 1.2 * demo.DEMO_SPACING
+    heights = [[round(float(p.centroid[2]), 2) for p in r.places] for r in (mesh, cloud)]
+    assert heights[0][:3] == heights[1][:3] and sorted(heights[0][:3]) == [0.0, 0.4, 0.75]
+    kept = it.load_scene(sample_mesh(room, round(mesh_area(room) / 0.02 ** 2), 3)[0],
+                         demo.DEMO_SPACING)
+    assert not any("thinned" in n for n in kept.notes)

@@ -32,7 +32,7 @@ from interaction_tensor.capture import (
                                         write_input_frame_outputs,
 )
 from interaction_tensor.descriptor.tensor import InteractionTensor, Keypoints
-from interaction_tensor.detection.places import Prediction
+from interaction_tensor.detection.places import Place, Prediction
 from interaction_tensor.detection.result import Detection
 from interaction_tensor.detection.search import detect_many, score_at
 from interaction_tensor.errors import InputError, ItensorError, SettingsError
@@ -40,6 +40,7 @@ from interaction_tensor.geometry.core import Geometry, validate_geometry
 from interaction_tensor.geometry.load import as_geometry, load_geometry
 from interaction_tensor.geometry.scene import Scene, prepare_scene
 from interaction_tensor.outputs.export import export
+from interaction_tensor.outputs.html import write_viewer as view
 from interaction_tensor.settings import PLACEMENT_TESTS, DetectSettings, TrainSettings
 
 __all__ = [
@@ -47,6 +48,7 @@ __all__ = [
     "load_geometry", "validate_geometry", "DetectSettings", "TrainSettings", "PLACEMENT_TESTS",
     "InteractionTensor", "Keypoints", "Scene", "prepare_scene", "Detection", "detect",
     "detect_many", "load_scene", "load_tensor", "train", "batch", "score_at", "Prediction",
+    "Place", "view",
     "export", "load_intrinsics", "load_rgbd", "prepare_real_scene",
     "write_input_frame_outputs",
 ]

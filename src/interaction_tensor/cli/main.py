@@ -309,6 +309,13 @@ def summary(result, outdir) -> dict:
                              "angle": p.angle, "place": p.place} for p in result.predictions]}
 
 
+def render_option(p) -> None:
+    """``--render`` (the default) / ``--no-render``: whether ``render.png`` is written."""
+    p.add_argument("--render", action=argparse.BooleanOptionalAction, default=True,
+                   help="write render.png: the heat map, the best places outlined and the "
+                        "query posed at each prediction (default; --no-render skips it)")
+
+
 def cmd_detect(args) -> int:
 
     tensor = load_tensor(args.descriptor)
@@ -349,7 +356,7 @@ def cmd_batch(args) -> int:
     if args.scan:
         options["scan"] = True
     result = batch(args.scenes, args.descriptors, args.output, _detect_settings(args),
-                   scheduler=args.scheduler, workers=args.workers, render=not args.no_render,
+                   scheduler=args.scheduler, workers=args.workers, render=args.render,
                    progress=_show_progress(args), **options)
     if args.json:
         print(json.dumps(result.summary()))
@@ -465,8 +472,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("descriptor", help="descriptor written by 'itensor train'")
     p.add_argument("-o", "--output", required=True, help="output directory")
     detection_options(p)
-    p.add_argument("--render", action="store_true",
-                   help="also write render.png: the heat map and the top predictions")
+    render_option(p)
     quiet_option(p)
     p.add_argument("--json", action="store_true",
                    help="print a one-line JSON summary instead of the report")
@@ -489,8 +495,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=number(int, low=0, high=1024), default=None,
                    help="local cluster worker processes (default: the machine's cores); "
                         "0 runs in this process without Dask")
-    p.add_argument("--no-render", action="store_true",
-                   help="skip render.png per result (faster; index.html then has no pictures)")
+    render_option(p)
     detection_options(p)
     p.add_argument("--scan", action="store_true",
                    help="the scenes are captured clouds: clean and gravity-align them")
@@ -514,10 +519,9 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("demo", help="train and detect on built-in procedural data")
     p.add_argument("-o", "--output", default="demo_out", help="output directory")
     p.add_argument("--top-k", type=number(int, low=1), default=10,
-                   help="predictions kept after suppression")
+                   help="predictions: the best pose of each of the best K places")
     seed_option(p)
-    p.add_argument("--render", action="store_true",
-                   help="also write render.png: the heat map and the top predictions")
+    render_option(p)
     quiet_option(p)
     p.add_argument("--json", action="store_true",
                    help="print a one-line JSON summary instead of the report")

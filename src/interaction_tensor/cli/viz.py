@@ -1,7 +1,7 @@
 """``itensor view``, ``itensor show`` and ``itensor render``: pictures and the HTML viewer.
 
-Registered into the main parser through ``cli._EXTENSIONS``. (``detect --render`` and
-``demo --render`` draw ``render.png`` inside their output transaction, ``Detection.save``.)
+Registered into the main parser through ``cli._EXTENSIONS``. (``detect`` and ``demo`` draw
+``render.png`` inside their output transaction, ``Detection.save``, unless ``--no-render``.)
 """
 
 from __future__ import annotations
@@ -9,14 +9,11 @@ from __future__ import annotations
 import time
 
 from interaction_tensor.cli.common import _out_file, number, quiet_option
-from interaction_tensor.errors import InputError
 from interaction_tensor.outputs import render_outdir, render_tensor, write_viewer
 
 
 def cmd_view(args) -> int:
 
-    if args.max_points < 1000:
-        raise InputError(None, f"--max-points must be at least 1000, got {args.max_points}")
     t0 = time.perf_counter()
     path = write_viewer(args.outdir, max_points=args.max_points)
     if not args.quiet:

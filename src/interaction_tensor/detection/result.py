@@ -158,7 +158,7 @@ class Detection:
                 f"{len(self.pair_point)} pairs accepted at threshold {self.threshold:.3f}>")
 
     # ------------------------------------------------------------ outputs
-    def save(self, outdir, *, render: bool = False, scene_name: str | None = None,
+    def save(self, outdir, *, render: bool = True, scene_name: str | None = None,
              descriptor_name: str | None = None, also: dict | None = None) -> Path:
         """Write the result into ``outdir`` (what ``itensor detect -o`` writes), as one
         transaction: built in a temporary sibling directory and swapped in, so ``outdir``
@@ -169,8 +169,9 @@ class Detection:
         and Blender) and ``top/``; ``descriptor.npz``, a copy of the descriptor, unless
         ``descriptor_name`` is the path of its file (so that ``itensor view`` shows the
         training example however the descriptor was made); for a captured scene also the
-        same in the input's own frame; with ``render`` also ``render.png``. ``also`` maps further file names to functions that
-        write them (given the path), inside the same transaction. An existing ``outdir`` must
+        same in the input's own frame; ``render.png``, the picture, unless ``render`` is
+        False. ``also`` maps further file names to functions that write them (given the
+        path), inside the same transaction. An existing ``outdir`` must
         be empty or hold an earlier result (and nothing else). Returns ``outdir`` as a Path.
         """
         outdir = output_path(outdir, "output directory")

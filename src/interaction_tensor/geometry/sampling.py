@@ -109,31 +109,33 @@ def buried_samples(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
 
 
 def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = None,
-                     progress: bool = False) -> np.ndarray:
+                     progress: bool = False, at: np.ndarray | None = None) -> np.ndarray:
     """Unit normals of a point cloud by PCA of the ``k`` nearest neighbours, 50,000 points
     at a time (with ``progress``, a progress bar advanced by each: about 15 s a million
-    points on two cores).
+    points on two cores); with ``at`` (indices), at those points only, their neighbours
+    taken from the whole cloud.
 
     The sign is chosen so that normals point to +Z where they are not horizontal
     (normals of clouds are unoriented; callers that need a side use their own rule).
 
-    Returns (N, 3) float64.
+    Returns (N, 3) float64, or (len(at), 3).
     """
     points = np.asarray(points, dtype=np.float64)
     k = int(min(k, len(points)))
     tree = cKDTree(points) if tree is None else tree
-    normals = np.empty_like(points)
+    queries = points if at is None else points[np.asarray(at, np.int64)]
+    normals = np.empty_like(queries)
     step = 50_000  # bounds the (step, k, 3) neighbourhood arrays (about 40 MB)
     bar = None
-    if progress and len(points) > step:
+    if progress and len(queries) > step:
         from tqdm import tqdm
 
-        bar = tqdm(total=len(points), unit="pt", unit_scale=True, desc="normals",
+        bar = tqdm(total=len(queries), unit="pt", unit_scale=True, desc="normals",
                    leave=False)
     try:
-        for start in range(0, len(points), step):
+        for start in range(0, len(queries), step):
             sl = slice(start, start + step)
-            _, idx = tree.query(points[sl], k=k, workers=-1)
+            _, idx = tree.query(queries[sl], k=k, workers=-1)
             nb = points[idx]
             nb -= nb.mean(axis=1, keepdims=True)
             cov = np.einsum("nki,nkj->nij", nb, nb)

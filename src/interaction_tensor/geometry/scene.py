@@ -337,8 +337,9 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
     Meshes are sampled area-uniformly at ``spacing`` (m): count = area / spacing^2; a mesh
     whose count exceeds ``max_points`` is refused before sampling (:func:`mesh_samples`).
     The scene keeps the mesh (``Scene.mesh``) for detection's collision test. Point clouds
-    are used as they are; their normals are estimated by PCA when the file had none (a
-    progress bar with ``progress``). ``pairs_per_point``: detection's sample fraction x
+    are used as they are, unless more than :data:`DENSE_FACTOR` times denser than
+    ``spacing``: then thinned to it (:func:`thinned`, said in the scene's notes); their
+    normals are estimated by PCA when the file had none (a progress bar with ``progress``). ``pairs_per_point``: detection's sample fraction x
     orientations, checked with the memory (:func:`check_memory`) before any work.
     """
     validate_geometry(geometry)
@@ -360,17 +361,53 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
                      mesh=(np.asarray(geometry.vertices, np.float64),
                            np.asarray(geometry.faces, np.int64)))
     points = geometry.vertices
+    normals = geometry.normals
+    if normals is not None and len(normals) != len(points):
+        normals = None
+    notes = list(geometry.notes)
     check_memory(len(points), geometry.source, pairs_per_point=pairs_per_point)
     tree = cKDTree(points)
-    normals = geometry.normals
-    if normals is None or len(normals) != len(points):
+    measured = mean_spacing(points, tree)
+    if 0 < measured < spacing / DENSE_FACTOR:
+        # denser than the descriptor looks: thinned to its spacing (the same places as the
+        # mesh, a fraction of the work); a smaller spacing keeps more
+        keep = thinned(points, spacing)
+        notes.append(f"thinned from {len(points):,} points ({1000 * measured:.1f} mm apart) "
+                     f"to {len(keep):,} at the descriptor's {1000 * spacing:.0f} mm spacing "
+                     "(give a smaller spacing to keep more)")
+        # normals from the whole cloud's neighbourhoods: a thin board keeps its two faces
+        normals = (estimate_normals(points, tree=tree, progress=progress, at=keep)
+                   if normals is None else normals[keep])
+        points = points[keep]
+        tree = cKDTree(points)
+        measured = mean_spacing(points, tree)
+    if normals is None:
         normals = estimate_normals(points, tree=tree, progress=progress)
     else:
         length = np.linalg.norm(normals, axis=1, keepdims=True)
         normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
     # the tree is not kept: the default (Numba) backend searches its own grid, and a
     # cKDTree costs 32 bytes a point (rebuilt on first use by the other paths)
-    spacing = mean_spacing(points, tree)
     del tree
-    points, normals = spatially_sorted(points, normals, spacing)
-    return Scene(points, normals, spacing, geometry.source, False, notes=list(geometry.notes))
+    points, normals = spatially_sorted(points, normals, measured)
+    return Scene(points, normals, measured, geometry.source, False, notes=notes)
+
+
+#: A point cloud this many times denser than the spacing asked for (the descriptor's) is
+#: thinned to it (:func:`thinned`).
+DENSE_FACTOR = 1.5
+
+
+def thinned(points: np.ndarray, spacing: float) -> np.ndarray:
+    """Indices (sorted) of one point per cube of edge ``spacing``: the one nearest the cube's
+    centre (ties to the lower index). A surface keeps about one point per ``spacing`` squared,
+    as a mesh sampled at that spacing does, and every point kept is a measured one."""
+    p = np.asarray(points, np.float64)
+    cell = np.floor((p - p.min(axis=0)) / spacing).astype(np.int64)
+    dims = cell.max(axis=0) + 1
+    key = (cell[:, 0] * dims[1] + cell[:, 1]) * dims[2] + cell[:, 2]
+    off = ((p - p.min(axis=0)) / spacing - cell - 0.5) ** 2
+    order = np.lexsort((np.arange(len(p)), off.sum(axis=1), key))
+    first = np.ones(len(order), bool)
+    first[1:] = key[order][1:] != key[order][:-1]
+    return np.sort(order[first])

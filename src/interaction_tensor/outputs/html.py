@@ -1,7 +1,7 @@
 """``index.html``: a self-contained interactive 3D page for a detection directory.
 
 The page inlines its data (base64 typed arrays in a JSON block) and the viewer script shipped
-in ``viz/static/viewer.js`` (a small WebGL viewer with a Canvas 2D fallback), so it opens
+in ``outputs/static/viewer.js`` (a small WebGL viewer with a Canvas 2D fallback), so it opens
 from disk with no network access.
 """
 
@@ -16,12 +16,15 @@ from pathlib import Path
 import numpy as np
 
 from interaction_tensor.descriptor.tensor import InteractionTensor
+from interaction_tensor.errors import InputError
 from interaction_tensor.geometry.files import atomic_path, output_path
 from interaction_tensor.geometry.sampling import mean_spacing
 from interaction_tensor.outputs.export import colormap
 from interaction_tensor.outputs.render import load_outdir
 
 MAX_POINTS = 200_000
+#: The fewest scene points the page may be asked to keep.
+MIN_POINTS = 1000
 
 
 def _b64(array, dtype) -> str:
@@ -205,9 +208,11 @@ def write_viewer(outdir, max_points: int = MAX_POINTS, out_html=None, seed: int 
     note when it is), the query object posed at every top prediction, a list of predictions
     (click one to highlight it and fly to it) and, when the descriptor named in
     ``predictions.json`` can be found, the training example with the bisector points and the
-    keypoints' provenance vectors coloured by weight.
+    keypoints' provenance vectors coloured by weight. ``it.view`` and ``itensor view``.
     """
-
+    if not max_points >= MIN_POINTS:
+        raise InputError(None, f"max_points (--max-points) must be at least {MIN_POINTS}, "
+                               f"got {max_points}")
     outdir = Path(outdir)
     out = outdir / "index.html" if out_html is None else output_path(out_html, "page (HTML)")
     data = build_data(outdir, max_points, seed)
