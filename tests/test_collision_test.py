@@ -25,7 +25,7 @@ from interaction_tensor.detection.search import Engine, detect
 from interaction_tensor.errors import InputError
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.geometry import collision
-from interaction_tensor.geometry.collision import Body, MeshCollider, through_section
+from interaction_tensor.geometry.collision import Body, MeshCollider, person_parts, through_section
 from interaction_tensor.geometry.collision import polygon as collision_polygon
 from interaction_tensor.placement.checks import (
     FAILS_COLLISION,
@@ -388,3 +388,24 @@ def test_part_above_cuts_only_the_crossing_triangles_and_keeps_the_same_surface(
     assert len(pf) < len(f) and (pv[pf][:, :, 2] > z).all()
 
 
+
+
+def test_a_limbs_test_cuts_a_person_into_its_body_and_limbs(tmp_path):
+    """``(depth, "limbs")``: the body and each limb freed by its own move (the judge's rule);
+    it survives the descriptor file, and anything else in its place is refused."""
+    tensor = affordances.build_descriptor("sitting-human")
+    tensor.set_acceptance(tensor.threshold(), collision=[(0.02, "limbs")])
+    bodies = tensor.collision_bodies()
+    assert [d for _, d in bodies] == [0.02] * 5                 # body, two legs, two arms
+    v = bodies[0][0].vertices
+    seat = tensor.reference_point
+    legs = [v[b.faces].mean(axis=1) for b, _ in bodies[1:3]]
+    assert all((c[:, 2] < seat[2] - 0.05).all() for c in legs)
+    assert (legs[0][:, 1] > seat[1]).all() and (legs[1][:, 1] <= seat[1]).all()
+    _, parts = person_parts(tensor.query_vertices, tensor.query_faces, seat)
+    assert [len(b) for b, _ in bodies] == [len(f) for _, f in parts]     # every triangle once
+    back = it.InteractionTensor.load(tensor.save(tmp_path / "limbs.npz"))
+    assert back.collision_tests == ((0.02, "limbs"),)
+    for bad in ([(0.02, "arms")], [(0.02, True)], [("limbs", 0.02)]):
+        with pytest.raises(ValueError, match="limbs"):
+            tensor.set_acceptance(tensor.threshold(), collision=bad)

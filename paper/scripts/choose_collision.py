@@ -2,15 +2,16 @@
 
 For every labelled pose (:mod:`itensor_paper.labelled`) and every test
 (``above``: which query triangles are tested, all of them or those above the reference point
-by more than ``above`` m; ``depth``: how deep a move may free them, m), the posed query is
+by more than ``above`` m, or for a person ``limbs``: its body and each limb on its own, as
+the judge tests them; ``depth``: how deep a move may free them, m), the posed query is
 tested against the scene's mesh as detection tests it (:class:`~interaction_tensor.detection.search.
 CollisionCheck`), and so is the through test (the scene must cross the posed section of what
 passed through the query in the example: a rail through the hook; the example's descriptor's
 ``through_section``). An option is one test or two (a placement must pass both), with or
 without the through test. The option kept per affordance rejects the most invalid poses
 among those that keep every valid one; ties go to fewer tests (no through test first, one
-collision test before two), then to testing more of the query (``above`` None first, then
-the lower), then to the smaller depth.
+collision test before two), then to the judge's own rule (``limbs``, for a person), then to
+testing more of the query (``above`` None first, then the lower), then to the smaller depth.
 
 Then the ground test (``clearance.below_ground``: the posed query no deeper than ``g`` below
 the lowest scene sample around it, on the scene sampled at 1 cm as detection samples it) is
@@ -63,6 +64,7 @@ from pathlib import Path
 import numpy as np
 
 from interaction_tensor import affordances as _aff
+from interaction_tensor.descriptor.tensor import LIMBS
 from interaction_tensor.geometry import collision
 from interaction_tensor.geometry.scene import prepare_scene
 from interaction_tensor.placement.checks import (
@@ -78,7 +80,7 @@ from itensor_paper import labelled
 TESTS = {a: _aff.get(a).judge.tests for a in _aff.names()}
 from interaction_tensor import affordances
 
-ABOVE = (None, -0.05, 0.0, 0.05, 0.10)
+ABOVE = (LIMBS, None, -0.05, 0.0, 0.05, 0.10)
 DEPTHS = (0.01, 0.02, 0.05, 0.1, 0.2)
 GROUND_DEPTHS = (0.01, 0.02, 0.05, 0.1)
 FEET_REACHES = (0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5)
@@ -110,8 +112,18 @@ STRADDLE_OPTIONS = [(a, lat) for a in (True, False) for lat in (None,) + STRADDL
                     if a or lat is not None]
 
 
+def tensor_limbs(tensor) -> list:
+    """The (Body, depth) pairs a ``"limbs"`` collision test of ``tensor`` tests."""
+    saved = tensor.collision_tests
+    tensor.set_acceptance(tensor.threshold(), collision=[(0.02, LIMBS)])
+    try:
+        return tensor.collision_bodies()
+    finally:
+        tensor.set_acceptance(tensor.threshold(), collision=list(saved) or "off")
+
+
 def _label(above) -> str:
-    return "all" if above is None else f"{above:g}"
+    return "all" if above is None else above if isinstance(above, str) else f"{above:g}"
 
 
 def options(rows: list) -> list:
@@ -195,6 +207,10 @@ def main(argv=None) -> int:
             v, f = tensor.query_vertices, tensor.query_faces
             bodies = {}
             for above in ABOVE:
+                if above == LIMBS:              # a person's body and limbs, each on its own
+                    if p.affordance in PERSONS:
+                        bodies[above] = [b for b, _ in tensor_limbs(tensor)]
+                    continue
                 pv, faces = collision.part_above(v, f, None if above is None
                                                  else tensor.reference_point[2] + above)
                 if len(faces):                  # nothing of a bowl lies above its support
@@ -222,7 +238,8 @@ def main(argv=None) -> int:
                 for d in CONTACT_DISTANCES} if p.affordance in PERSONS else \
             {f"seat {d:g}": "" for d in CONTACT_DISTANCES}
         for above, body in bodies.items():
-            sep = colliders[p.scene].separation(body, pose, limit=max(DEPTHS))
+            sep = max(colliders[p.scene].separation(b, pose, limit=max(DEPTHS))
+                      for b in (body if isinstance(body, list) else [body]))
             rows.append({"affordance": p.affordance, "example": p.example, "scene": p.scene,
                          "case": p.case, "valid": p.valid, "pose": n, "above": _label(above),
                          "separation_m": sep if np.isfinite(sep) else "inf",

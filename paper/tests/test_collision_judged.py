@@ -15,6 +15,7 @@ from interaction_tensor.detection.search import Engine, detect
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.geometry import collision
 from interaction_tensor.geometry.collision import Body, MeshCollider
+from itensor_paper.judge import Judge
 from itensor_paper.labelled import seated_reach, site_pose
 from itensor_paper.tuning import RankingCheck, table_top
 
@@ -98,3 +99,22 @@ def test_sitting_collision_test_rejects_knees_through_a_seats_front_edge(behind,
         assert collider.separation(Body(v, f), pose, limit=0.05) <= 0.05
         uncut = f[(v[:, 2] > z)[f].all(axis=1)]
         assert collider.separation(Body(v, uncut), pose, limit=depth) <= depth
+
+
+@pytest.mark.parametrize("example", ["sitting-human", "riding-human"])
+def test_the_limbs_test_cuts_a_person_as_the_judge_does(example):
+    """One rule in one place: detection's ``"limbs"`` collision test and the judge's
+    penetration test cut a person into the same body and limbs (a rider's thighs with its
+    legs), so a pose passes the one at 2 cm exactly when every part passes the other."""
+    ex = affordances.build(example)
+    tensor = affordances.build_descriptor(example, example=ex)
+    tensor.set_acceptance(tensor.threshold(), collision=[(0.02, "limbs")])
+    judge = Judge.for_example(ex)
+    np.testing.assert_allclose(judge.support_point, tensor.reference_point, atol=1e-9)
+    mine = [b for b, _ in tensor.collision_bodies()]
+    theirs = [(b, depth) for b, depth, _ in judge._bodies(ex.query)]
+    assert [len(b) for b in mine] == [len(b) for b, _ in theirs]
+    for a, (b, depth) in zip(mine, theirs):
+        assert depth == 0.02
+        np.testing.assert_array_equal(a.faces, b.faces)
+        np.testing.assert_allclose(a.vertices, b.vertices)

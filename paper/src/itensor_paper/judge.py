@@ -159,11 +159,12 @@ class JudgeSettings:
     penetration_depth: float = 0.01
     person_penetration_depth: float = 0.02
     limb_penetration: float = 0.02
-    limb_below_seat: float = 0.05
-    arm_above_seat: float = 0.08
-    arm_lateral: float = 0.16
-    forearm_above_seat: tuple = (0.20, 0.50)
-    forearm_ahead: float = 0.18
+    # a person's parts: detection's "limbs" collision test cuts them the same way
+    limb_below_seat: float = collision.LIMB_BELOW_SEAT
+    arm_above_seat: float = collision.ARM_ABOVE_SEAT
+    arm_lateral: float = collision.ARM_LATERAL
+    forearm_above_seat: tuple = collision.FOREARM_ABOVE_SEAT
+    forearm_ahead: float = collision.FOREARM_AHEAD
     feet_height: float = 0.12
     contact_tolerance: float = 0.01
     contact_distance: float = 0.02
@@ -404,25 +405,11 @@ class Judge:
         v, f = query.vertices, query.faces
         if not self.person:
             return [(collision.Body(v, f), st.penetration_depth, "object")]
-        # small triangles, so that a face's centroid says which part it belongs to
-        v, f = trimesh.remesh.subdivide_to_size(v, f, max_edge=0.02, max_iter=12)
-        sp = self.support_point
-        c = v[f].mean(axis=1)                       # face centroids
-        lower = c[:, 2] < sp[2] - st.limb_below_seat
-        if "legroom" in self.tests:                 # a rider's thighs, sloping to the knees
-            lower |= (c[:, 0] > sp[0] + 0.06) & (c[:, 2] < sp[2] + 0.08)
-        up = c[:, 2] - sp[2]
-        arm = (((up > st.arm_above_seat) & (np.abs(c[:, 1] - sp[1]) > st.arm_lateral))
-               | ((up > st.forearm_above_seat[0]) & (up < st.forearm_above_seat[1])
-                  & (c[:, 0] > sp[0] + st.forearm_ahead)))
-        left = c[:, 1] > sp[1]
-        out, rest = [], np.ones(len(f), bool)
-        for name, part in (("left leg", lower & left), ("right leg", lower & ~left),
-                           ("left arm", arm & left), ("right arm", arm & ~left)):
-            if part.any():
-                rest &= ~part
-                out.append((collision.Body(v, f[part]), st.limb_penetration, name))
-        return [(collision.Body(v, f[rest]), st.person_penetration_depth, "body")] + out
+        v, parts = collision.person_parts(
+            v, f, self.support_point, "legroom" in self.tests, st.limb_below_seat,
+            st.arm_above_seat, st.arm_lateral, st.forearm_above_seat, st.forearm_ahead)
+        return [(collision.Body(v, part), st.person_penetration_depth if name == "body"
+                 else st.limb_penetration, name) for name, part in parts]
 
     def _loop_crossed(self, scene: JudgeScene, rot, t) -> bool:
         """Whether some scene sample within a spacing of the posed loop disk's plane, inside

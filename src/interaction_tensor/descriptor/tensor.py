@@ -29,6 +29,7 @@ from interaction_tensor.errors import InputError, SettingsError
 from interaction_tensor.geometry.collision import (
     Body,
     part_above,
+    person_parts,
     polygon,
     through_section,
 )
@@ -394,12 +395,20 @@ class InteractionTensor:
         triangles in the training frame, depth m), built once; empty when the descriptor has
         no collision test or no triangles to test (a point-cloud query). A test with a height
         tests the query's triangles cut to 2 cm edges above it (:func:`.collision.part_above`);
-        one whose height leaves no triangle is dropped."""
+        one whose height leaves no triangle is dropped. A ``"limbs"`` test tests a person's
+        body and each of its limbs on its own (:func:`.collision.person_parts`, about the
+        reference point; a rider's thighs with its legs when the descriptor has a straddle
+        test), each to be freed by a move of the test's depth: the judge's rule."""
         if "_collision_bodies" not in self.__dict__:
             bodies = []
             if len(self.query_faces):
 
                 for depth, above in self.collision_tests:
+                    if above == LIMBS:
+                        v, parts = person_parts(self.query_vertices, self.query_faces,
+                                                self.reference_point, self.straddle is not None)
+                        bodies += [(Body(v, part), depth) for _, part in parts if len(part)]
+                        continue
                     v, faces = part_above(self.query_vertices, self.query_faces,
                                           None if above is None
                                           else self.reference_point[2] + above)
@@ -1220,9 +1229,13 @@ def _contact_groups(q_pts, q_gap, q_normal, ground, reference, settings: TrainSe
     return np.concatenate(out_p), np.concatenate(out_g), np.concatenate(out_n)
 
 
+#: A collision test's ``above`` that tests a person part by part (:attr:`InteractionTensor.collision_tests`).
+LIMBS = "limbs"
+
+
 def collision_tests(value) -> tuple:
     """Detection's collision tests from (depth, above) or a list of them, checked: depth in
-    [0, 1] m, above None or a height in [-10, 10] m. Raises ValueError."""
+    [0, 1] m, above None, a height in [-10, 10] m or ``"limbs"``. Raises ValueError."""
     try:
         items = list(value) if not isinstance(value, (str, bytes)) else None
     except TypeError:                              # a number, None, ...
@@ -1234,14 +1247,17 @@ def collision_tests(value) -> tuple:
     tests = []
     for item in items:
         item = tuple(item) if isinstance(item, (list, tuple)) else ()
+        limbs = len(item) == 2 and item[1] == LIMBS
         ok = len(item) == 2 and all(v is None or (isinstance(v, (int, float)) and
-                                                  not isinstance(v, bool)) for v in item)
+                                                  not isinstance(v, bool))
+                                    for v in (item[:1] if limbs else item))
         depth, above = item if ok else (None, None)
         if not ok or depth is None or not (np.isfinite(depth) and 0 <= depth <= 1) or \
-                (above is not None and not (np.isfinite(above) and abs(above) <= 10)):
+                (above is not None and not limbs
+                 and not (np.isfinite(above) and abs(above) <= 10)):
             raise ValueError(f"collision test {list(item) if item else value!r} must be (depth "
-                             "in [0, 1] m, above: None or a height in [-10, 10] m)")
-        tests.append((float(depth), None if above is None else float(above)))
+                             "in [0, 1] m, above: None, a height in [-10, 10] m or 'limbs')")
+        tests.append((float(depth), above if above is None or limbs else float(above)))
     return tuple(tests)
 
 

@@ -264,3 +264,54 @@ def polygon(vertices: np.ndarray, centre=None):
     i = np.arange(n)
     front = np.c_[np.zeros(n, int), 1 + i, 1 + (i + 1) % n]
     return v, np.vstack([front, front[:, [0, 2, 1]]])
+
+
+# --------------------------------------------------------------------------- a person's parts
+#: A person's limbs, tested each on its own (the judge's rule and detection's ``"limbs"``
+#: collision test): each lower leg more than this (m) below the seat point, ...
+LIMB_BELOW_SEAT = 0.05
+#: ... each arm more than this above the seat and ``ARM_LATERAL`` to the side of the
+#: mid-plane, ...
+ARM_ABOVE_SEAT = 0.08
+ARM_LATERAL = 0.16
+#: ... or a forearm this high above the seat and ``FOREARM_AHEAD`` ahead of it, ...
+FOREARM_ABOVE_SEAT = (0.20, 0.50)
+FOREARM_AHEAD = 0.18
+#: ... and, for a rider (``straddle``), the thighs sloping to the knees: ahead of the seat by
+#: more than the first and below it plus the second.
+THIGH_AHEAD_BELOW = (0.06, 0.08)
+
+
+def person_parts(vertices: np.ndarray, faces: np.ndarray, seat, straddle: bool = False,
+                 limb_below_seat: float = LIMB_BELOW_SEAT, arm_above_seat: float = ARM_ABOVE_SEAT,
+                 arm_lateral: float = ARM_LATERAL, forearm_above_seat=FOREARM_ABOVE_SEAT,
+                 forearm_ahead: float = FOREARM_AHEAD):
+    """A person's triangles split into the body and its limbs, each to be tested on its own
+    (no body part more than so deep inside the scene: a leg through a seat's front edge is
+    not excused by the body resting above it). The mesh is first cut to 2 cm edges, so that
+    a face's centroid says which part it belongs to; ``seat`` is the point the person sits
+    on, in the mesh's frame (+X ahead, +Z up). Returns (vertices, [(name, faces), ...]),
+    the body first, then the left and right leg and arm that have triangles."""
+    import trimesh
+
+    v, f = trimesh.remesh.subdivide_to_size(np.asarray(vertices, float),
+                                            np.asarray(faces, np.int64), max_edge=PART_EDGE,
+                                            max_iter=12)
+    sp = np.asarray(seat, float)
+    c = v[f].mean(axis=1)                       # face centroids
+    lower = c[:, 2] < sp[2] - limb_below_seat
+    if straddle:                                # a rider's thighs, sloping to the knees
+        lower |= ((c[:, 0] > sp[0] + THIGH_AHEAD_BELOW[0])
+                  & (c[:, 2] < sp[2] + THIGH_AHEAD_BELOW[1]))
+    up = c[:, 2] - sp[2]
+    arm = (((up > arm_above_seat) & (np.abs(c[:, 1] - sp[1]) > arm_lateral))
+           | ((up > forearm_above_seat[0]) & (up < forearm_above_seat[1])
+              & (c[:, 0] > sp[0] + forearm_ahead)))
+    left = c[:, 1] > sp[1]
+    parts, rest = [], np.ones(len(f), bool)
+    for name, part in (("left leg", lower & left), ("right leg", lower & ~left),
+                       ("left arm", arm & left), ("right arm", arm & ~left)):
+        if part.any():
+            rest &= ~part
+            parts.append((name, f[part]))
+    return v, [("body", f[rest])] + parts
