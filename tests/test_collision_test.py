@@ -80,7 +80,7 @@ def test_a_hanger_through_a_desk_top_is_never_predicted(hanging):
     assert det.stats["pairs_with_nothing_through"] == 0
     # the ranking of the evaluation ranks them with the pairs that fail a test
     # (shown when nothing else is left, below every pair not known to cross the scene)
-    idx, _, ok = rank_pairs(det, 3, suppression_radius(tensor, det.settings))
+    idx, _, ok = rank_pairs(det, 3, suppression_radius(tensor))
     assert len(idx) == 3 and not ok.any() and (det.collisions.state[idx] == 1).all()
 
 

@@ -68,6 +68,10 @@ def test_top_k_takes_one_pick_per_group():
     group = np.array([0, 0, 0, 1, -1])
     assert top_k(pos, scores, 5, 0.1) == [0, 1, 2, 3, 4]
     assert top_k(pos, scores, 5, 0.1, group=group) == [0, 3, 4]
+    # the radius parts poses of no place; two places are two answers however near
+    assert top_k(pos, scores, 5, 2.0) == [0, 3]
+    assert top_k(pos, scores, 5, 2.0, group=np.array([0, 1, 2, 3, 4])) == [0, 1, 2, 3, 4]
+    assert top_k(pos, scores, 5, 2.0, group=np.array([0, 1, 2, 3, -1])) == [0, 1, 2, 3]
     # a group whose best is refused gives its next best
     assert top_k(pos, scores, 5, 0.1, group=group, accept=lambda i: i != 0) == [1, 3, 4]
     # through the gathered path (scene points and point indices)

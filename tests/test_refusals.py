@@ -72,7 +72,7 @@ def test_numeric_options_never_take_what_they_cannot_use(text):
     """Whatever the text, a numeric option is either a finite in-range number or refused."""
     parser = build_parser()
     for option, low, high in (("--voxel-size", 0, 1), ("--max-tilt", 0, 90),
-                              ("--nms-radius", 0, np.inf), ("--seed", 0, 2**63 - 1)):
+                              ("--normal-tolerance", 0, 180), ("--seed", 0, 2**63 - 1)):
         action = parser._subparsers._group_actions[0].choices["detect"]._option_string_actions[
             option]
         try:

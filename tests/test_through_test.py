@@ -150,10 +150,11 @@ def test_detection_spends_the_exact_tests_on_hooks_with_something_through(hangin
         assert d.predictions and all(collider.collides(body, p.pose) for p in d.predictions)
         assert abs(d.predictions[0].position[0]) < 0.05
         assert len({p.place for p in d.predictions}) == len(d.predictions)
-    # the same places, as far as the exact tests allowed go: without the placement test they
-    # are spent on hooks with nothing through sooner, so it may find fewer
-    got, without = ([p.point_index for p in d.predictions] for d in (det, off))
-    assert len(without) >= 3 and got[:len(without)] == without
+    # the same best pose; then places (grouped from pairs the placement test filtered or
+    # not) as far as the exact tests allowed go, which without the placement test are spent
+    # on hooks with nothing through sooner
+    assert det.predictions[0].point_index == off.predictions[0].point_index
+    assert len(off.predictions) >= 3 and len(det.predictions) >= len(off.predictions)
 
 
 def test_the_cli_turns_the_test_off():

@@ -58,7 +58,7 @@ def test_the_tunings_top_ranks_untested_placements_as_the_evaluation_does(hangin
     base = fresh(10 ** 6)
     full, placed = full_scores(base, np.arange(len(base.pair_point)))
     position = scene.points[base.pair_point]
-    radius = suppression_radius(tensor, base.settings)
+    radius = suppression_radius(tensor)
     shared = CollisionCheck(base)
     untested_placed = 0
     for budget in (0, 1, 2, 3, 6, 12, 1000):

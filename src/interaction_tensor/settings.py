@@ -180,11 +180,8 @@ class DetectSettings:
     #: ground), through (something through a hook's loop) and collision (the ranked poses'
     #: triangles against the scene's, where the scene has triangles).
     skip_tests: tuple = ()
-    #: Predictions kept after non-maximum suppression.
+    #: Predictions: the best pose of each of the best ``top_k`` places.
     top_k: int = 10
-    #: Suppression radius (m) of the top-k; None: the query object's width (the larger side
-    #: of its horizontal bounding box), so that the posed objects of the top-k do not overlap.
-    nms_radius: float | None = None
     #: Spacing (m) at which mesh scenes are sampled; None: the descriptor's training spacing.
     scene_spacing: float | None = None
     #: ``auto``: the Numba kernels when Numba imports, else ``numpy``; ``numpy``: the plain
@@ -217,7 +214,6 @@ class DetectSettings:
                                                      if t in set(self.skip_tests)))
         _check(isinstance(self.top_k, numbers.Integral) and self.top_k >= 1,
                "top_k must be a positive integer")
-        _check(self.nms_radius is None or self.nms_radius >= 0, "nms_radius must be >= 0")
         _check(self.scene_spacing is None or (math.isfinite(self.scene_spacing) and
                                               MIN_SPACING <= self.scene_spacing <= 1.0),
                f"scene_spacing must be between {MIN_SPACING} and 1 metre (samples cost "

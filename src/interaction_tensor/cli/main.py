@@ -83,8 +83,6 @@ def detection_options(p) -> None:
                    help="largest angle in degrees between a test normal and N_aff")
     p.add_argument("--oriented-normals", action="store_true",
                    help="trust the sign of scene normals (default: compare the normal line)")
-    p.add_argument("--nms-radius", type=number(low=0), default=d.nms_radius,
-                   help="suppression radius in metres (default: the query object's width)")
     p.add_argument("--skip-test", action="append", default=[], metavar="TEST",
                    type=_placement_test,
                    help="a placement test not to run (repeat for more; comma-separated names "
@@ -191,7 +189,7 @@ _SETTING_OPTIONS = {
     "criterion": "criterion", "keypoints": "keypoints", "threshold": "threshold",
     "scene_spacing": "spacing", "n_orientations": "orientations",
     "normal_tolerance_deg": "normal_tolerance", "oriented_normals": "oriented_normals",
-    "nms_radius": "nms_radius", "backend": "backend", "device": "device"}
+    "backend": "backend", "device": "device"}
 
 
 def _detect_settings(args) -> DetectSettings:

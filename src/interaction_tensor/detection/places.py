@@ -1,6 +1,6 @@
 """Places and predictions: accepted pairs grouped into places (connected regions of a surface
-or an edge), the top k (the best pose of each of the best places, a suppression radius
-apart), and the heat map of accepted scores over the scene.
+or an edge), the top k (the best pose of each of the best places), and the heat map of
+accepted scores over the scene.
 """
 
 from __future__ import annotations
@@ -14,7 +14,6 @@ from scipy.spatial import cKDTree
 
 from interaction_tensor.descriptor.tensor import InteractionTensor
 from interaction_tensor.geometry.files import Gathered
-from interaction_tensor.settings import DetectSettings
 
 
 @dataclass
@@ -79,8 +78,10 @@ def top_k(positions: np.ndarray, scores: np.ndarray, k: int, radius: float,
     among the candidates it accepts, and only candidates that no pick suppresses are asked
     (detection's collision test of its top k).
 
-    With ``group``, (N,) int per candidate (-1: none), a pick also suppresses every other
-    candidate of its group (one pick per :class:`Place`).
+    With ``group``, (N,) int per candidate (-1: none), a pick suppresses every other
+    candidate of its group (one pick per :class:`Place`) and, by the radius, only candidates
+    of no group, or all when it has none: two places are two answers however near (a person
+    on a desk's edge and on the chair beside it).
     """
     if index is not None:
         index = np.asarray(index)
@@ -103,10 +104,11 @@ def top_k(positions: np.ndarray, scores: np.ndarray, k: int, radius: float,
         free = np.ones(len(idx), bool)
         if picks:
             chosen = positions[picks]
-            d2 = ((pos[:, None, :] - chosen[None, :, :]) ** 2).sum(axis=2)
-            free &= ~(d2 <= r2).any(axis=1)
+            near = (((pos[:, None, :] - chosen[None, :, :]) ** 2).sum(axis=2) <= r2)
             if group is not None:
+                near &= ((group[idx] < 0)[:, None] | (group[picks] < 0)[None, :])
                 free &= ~taken[group[idx]]
+            free &= ~near.any(axis=1)
         for j in np.flatnonzero(free):            # at most k picks end this loop
             if not free[j]:
                 continue
@@ -120,10 +122,10 @@ def top_k(positions: np.ndarray, scores: np.ndarray, k: int, radius: float,
             if len(picks) == k:
                 return picks
             near = ((pos - pos[j]) ** 2).sum(axis=1) <= r2
-            free &= ~near
             if group is not None and group[idx[j]] >= 0:
                 taken[group[idx[j]]] = True
-                free &= group[idx] != group[idx[j]]
+                near = (near & (group[idx] < 0)) | (group[idx] == group[idx[j]])
+            free &= ~near
     return picks
 
 
@@ -156,10 +158,10 @@ def heat_map(scene, pair_point: np.ndarray, pair_score: np.ndarray,
     return heat, count
 
 
-def suppression_radius(tensor: InteractionTensor, settings: DetectSettings) -> float:
-    """Top-k suppression radius (m): the setting, else the query object's width."""
-    if settings.nms_radius is not None:
-        return float(settings.nms_radius)
+def suppression_radius(tensor: InteractionTensor) -> float:
+    """Suppression radius (m) of a top k of poses that have no place (a ranking of rejected
+    pairs): the query object's width (the larger side of its horizontal bounding box), so
+    that their posed objects do not overlap."""
     return float(np.ptp(tensor.query_vertices[:, :2], axis=0).max())
 
 

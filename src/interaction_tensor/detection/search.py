@@ -152,7 +152,7 @@ def _finish(scene, tensor, settings, engine, threshold, test_idx, cand, pair_poi
                     complete=complete, scored=scored, engine=engine)
     n_o = settings.n_orientations
     t3 = time.perf_counter()
-    radius = suppression_radius(tensor, settings)
+    radius = suppression_radius(tensor)
     acc = accepted_indices(pairs.accepted)
     check = collision_check(det)
     picks = []
