@@ -112,16 +112,6 @@ STRADDLE_OPTIONS = [(a, lat) for a in (True, False) for lat in (None,) + STRADDL
                     if a or lat is not None]
 
 
-def tensor_limbs(tensor) -> list:
-    """The (Body, depth) pairs a ``"limbs"`` collision test of ``tensor`` tests."""
-    saved = tensor.collision_tests
-    tensor.set_acceptance(tensor.threshold(), collision=[(0.02, LIMBS)])
-    try:
-        return tensor.collision_bodies()
-    finally:
-        tensor.set_acceptance(tensor.threshold(), collision=list(saved) or "off")
-
-
 def _label(above) -> str:
     return "all" if above is None else above if isinstance(above, str) else f"{above:g}"
 
@@ -208,8 +198,10 @@ def main(argv=None) -> int:
             bodies = {}
             for above in ABOVE:
                 if above == LIMBS:              # a person's body and limbs, each on its own
-                    if p.affordance in PERSONS:
-                        bodies[above] = [b for b, _ in tensor_limbs(tensor)]
+                    if p.affordance in PERSONS:   # as the descriptor's collision_bodies cuts it
+                        pv, parts = collision.person_parts(v, f, tensor.reference_point,
+                                                           tensor.straddle is not None)
+                        bodies[above] = [collision.Body(pv, part) for _, part in parts]
                     continue
                 pv, faces = collision.part_above(v, f, None if above is None
                                                  else tensor.reference_point[2] + above)

@@ -18,7 +18,6 @@ from interaction_tensor.detection.places import (
     group_places,
     heat_map,
     place_cell,
-    suppression_radius,
     top_k,
 )
 from interaction_tensor.detection.ranking import collision_check
@@ -145,24 +144,23 @@ def test_all(scene, tensor, settings: DetectSettings, pair_point, pair_orient, g
 def _finish(scene, tensor, settings, engine, threshold, test_idx, cand, pair_point,
             pair_orient, pairs, timings, backend, t0, score_acc, viol, outcome, rest,
             complete, scored) -> Detection:
-    """Top-k with suppression (placements that reach it tested for collision), heat map,
-    statistics."""
+    """Places, the top k (the best pose of each of the best places; those that would enter
+    it tested for collision), heat map, statistics."""
     det = Detection(scene, tensor, settings, threshold, test_idx, cand, pair_point,
                     pair_orient, pairs, None, None, [], {}, score_acc, viol, rest, outcome,
                     complete=complete, scored=scored, engine=engine)
-    n_o = settings.n_orientations
     t3 = time.perf_counter()
-    radius = suppression_radius(tensor)
     acc = accepted_indices(pairs.accepted)
     check = collision_check(det)
     picks = []
     if engine.rank:
         # accepted pairs grouped into places; the top k: the best pose of each of the best
-        # places (one that passes the collision test), the suppression radius apart
+        # places (one that passes the collision test); every accepted pair has a place, so
+        # no radius parts them
         cell = place_cell(scene.spacing, settings.sample_fraction)
         det.accepted_place, det.places = group_places(scene.points, pair_point, pairs.score,
                                                       acc, cell, tensor.affordance_normal)
-        picks = top_k(scene.points, pairs.score[acc], settings.top_k, radius,
+        picks = top_k(scene.points, pairs.score[acc], settings.top_k, 0.0,
                       index=pair_point[acc], group=det.accepted_place,
                       accept=(lambda i: check.free(int(acc[i]))) if check.on else None)
     det.predictions = [det.prediction(int(acc[i]), int(det.accepted_place[i])) for i in picks]

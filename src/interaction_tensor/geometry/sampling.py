@@ -95,6 +95,8 @@ def buried_samples(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
     lifted = points + BURIED_LIFT * normals
     sample_part = part[face_index]
     tree = cKDTree(lifted)
+    by_part = np.argsort(part, kind="stable")                   # each part's faces, sliced
+    start = np.concatenate([[0], np.cumsum(size)])
     for c in np.flatnonzero(~open_part & (size >= 4)):          # closed parts, one at a time
         centre, reach = (lo[c] + hi[c]) / 2, np.linalg.norm(hi[c] - lo[c]) / 2
         near = np.asarray(tree.query_ball_point(centre, reach), np.int64)
@@ -103,7 +105,8 @@ def buried_samples(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
         near = near[(sample_part[near] != c) & ~buried[near]
                     & (lifted[near] >= lo[c]).all(axis=1) & (lifted[near] <= hi[c]).all(axis=1)]
         if len(near):
-            w = winding_numbers(lifted[near], mesh.vertices, merged[part == c])
+            w = winding_numbers(lifted[near], mesh.vertices,
+                                merged[by_part[start[c]:start[c + 1]]])
             buried[near[np.abs(w) >= 0.5]] = True
     return buried
 

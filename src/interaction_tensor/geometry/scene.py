@@ -339,7 +339,9 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
     The scene keeps the mesh (``Scene.mesh``) for detection's collision test. Point clouds
     are used as they are, unless more than :data:`DENSE_FACTOR` times denser than
     ``spacing``: then thinned to it (:func:`thinned`, said in the scene's notes); their
-    normals are estimated by PCA when the file had none (a progress bar with ``progress``). ``pairs_per_point``: detection's sample fraction x
+    normals are estimated by PCA when the file had none (a progress bar with ``progress``).
+    Mesh samples inside another closed part of the mesh are left out
+    (:func:`~.sampling.buried_samples`). ``pairs_per_point``: detection's sample fraction x
     orientations, checked with the memory (:func:`check_memory`) before any work.
     """
     validate_geometry(geometry)

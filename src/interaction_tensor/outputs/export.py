@@ -60,9 +60,11 @@ OBJECT_COLOR = (230, 60, 40, 255)
 #: the copy of the descriptor a result carries when its file is not named
 #: (:meth:`~interaction_tensor.detection.result.Detection.save`)
 DESCRIPTOR_FILE = "descriptor.npz"
+#: The file of every accepted pair (:func:`write_accepted`), beside ``predictions.json``.
+ACCEPTED_FILE = "accepted.npz"
 
 #: every name a detection's output directory may hold (``Detection.save``, ``itensor view``)
-OUTPUT_NAMES = ("predictions.json", "accepted.npz", DESCRIPTOR_FILE, "heatmap.ply",
+OUTPUT_NAMES = ("predictions.json", ACCEPTED_FILE, DESCRIPTOR_FILE, "heatmap.ply",
                 "predictions.glb", "top", "render.png", "index.html",
                 "predictions_input_frame.json", "heatmap_input_frame.ply", "top_input_frame",
                 "scene.ply", "scene_input_frame.ply")
@@ -149,8 +151,6 @@ def write_glb(detection, path) -> None:
         tmp.write_bytes(trimesh.exchange.gltf.export_glb(scene))
 
 
-#: The file of every accepted pair (:func:`write_accepted`), beside ``predictions.json``.
-ACCEPTED_FILE = "accepted.npz"
 #: Its arrays, one entry per accepted (test point, orientation) pair.
 ACCEPTED_COLUMNS = ("point_index", "orientation_index", "score", "comparisons_to_decision",
                     "place")

@@ -30,6 +30,11 @@ from interaction_tensor.outputs.raster import Canvas, frame_points
 OBJECT_COLOR = (230, 60, 40)
 #: The outline of each predicted place (the box round its accepted test points).
 PLACE_COLOR = (15, 15, 15)
+#: A box's 8 corners (True: the high end on that axis) and its 12 edges (corners one axis
+#: apart).
+_CORNERS = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], bool)
+_BOX_EDGES = np.array([(i, j) for i in range(8) for j in range(i + 1, 8)
+                       if (_CORNERS[i] != _CORNERS[j]).sum() == 1])
 PANEL = (640, 480)
 
 
@@ -82,14 +87,12 @@ class Outdir:
                 continue
             lo, hi = np.asarray(place["lo"], float), np.asarray(place["hi"], float)
             hi[2] += lift
-            corner = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                               for z in (lo[2], hi[2])])
-            for i in range(8):
-                for j in range(i + 1, 8):
-                    if bin(i ^ j).count("1") == 1:      # corners one coordinate apart
-                        starts.append(corner[i])
-                        ends.append(corner[j])
-        return np.asarray(starts, float).reshape(-1, 3), np.asarray(ends, float).reshape(-1, 3)
+            corner = np.where(_CORNERS, hi, lo)
+            starts.append(corner[_BOX_EDGES[:, 0]])
+            ends.append(corner[_BOX_EDGES[:, 1]])
+        if not starts:
+            return np.zeros((0, 3)), np.zeros((0, 3))
+        return np.vstack(starts), np.vstack(ends)
 
 
 def load_outdir(outdir, top_k: int | None = None) -> Outdir:
