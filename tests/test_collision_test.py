@@ -141,6 +141,11 @@ def test_a_captured_surface_s_noise_is_allowed_on_top_of_the_depth():
     noisy = dataclasses.replace(raised, surface_noise=0.005, _collider=None)
     det = it.detect(noisy, bowl, settings, test_indices=top[::40])
     assert len(det.predictions) == 1 and det.stats["pairs_failing_collision"] == 0
+    # the one rule, as the judge calls it too: the noise is the collider's
+    (body, depth), = bowl.collision_bodies()
+    pose = det.predictions[0].pose
+    assert raised.collider().penetrates(body, pose, depth)[0]
+    assert not noisy.collider().penetrates(body, pose, depth)[0]
 
 
 def test_the_collision_setting_survives_a_file_and_a_bad_one_is_refused(hanging, tmp_path):

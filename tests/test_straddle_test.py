@@ -115,7 +115,8 @@ def test_a_rider_touching_the_bench_passes_the_seat_contact_and_one_hovering_doe
     """Riding's contact test (mode ``seat``): at least its fraction of the seat region, the
     rider's surface within 3 cm above its lowest point near the seat (the judge's main
     contact of a person), within its distance of the scene. Astride the bench it touches;
-    raised 6 cm (a hover) it does not; the mode survives a descriptor file."""
+    raised 6 cm (a hover) too little of it is near the bench (its sides only); the mode
+    survives a descriptor file."""
     assert riding.contact_groups == "seat"
     region = seat_region(riding)
     assert 20 <= len(region) <= SEAT_POINTS
@@ -126,7 +127,7 @@ def test_a_rider_touching_the_bench_passes_the_seat_contact_and_one_hovering_doe
     up = pose.copy()
     up[2, 3] += 0.06
     frac = seat_fractions_poses(np.stack([pose, up]), riding, riding.contact_distance, room)
-    assert frac[0] >= riding.contact_fraction and frac[1] == 0
+    assert frac[0] >= riding.contact_fraction > frac[1]
     only = dict(skip_tests=tuple(t for t in STRADDLE_ONLY if t != "contact") + ("straddle",))
     points = np.array([bench, [0.0, 0.0, 0.56]])
     out = check_placements(points, np.array([0, 0]), riding, it.DetectSettings(**only), room)[1]

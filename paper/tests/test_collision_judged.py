@@ -13,8 +13,7 @@ from interaction_tensor.detection.places import suppression_radius
 from interaction_tensor.detection.ranking import CollisionCheck, full_scores, rank_pairs
 from interaction_tensor.detection.search import Engine, detect
 from interaction_tensor.examples.procedural import box_part, parts_mesh
-from interaction_tensor.geometry import collision
-from interaction_tensor.geometry.collision import Body, MeshCollider
+from interaction_tensor.geometry.collision import MeshCollider
 from itensor_paper.judge import Judge
 from itensor_paper.labelled import seated_reach, site_pose
 from itensor_paper.tuning import RankingCheck, table_top
@@ -34,7 +33,8 @@ def test_the_tuned_examples_carry_the_collision_test_chosen_on_the_labelled_set(
     _, tensor = hanging
     assert tensor.collision_tests == ((0.01, None),) and tensor.through
     riding = affordances.acceptance("riding")
-    assert riding["collision"] == [(0.01, 0.05)] and not riding["through"]  # legs hang free
+    assert riding["collision"] == [(0.02, "limbs")] and not riding["through"]
+    assert affordances.acceptance("sitting")["collision"] == [(0.02, "limbs")]
     (body, depth), = tensor.collision_bodies()
     assert len(body) == len(tensor.query_faces) and depth == 0.01
 
@@ -74,31 +74,27 @@ def test_the_tunings_top_ranks_untested_placements_as_the_evaluation_does(hangin
     assert untested_placed > 0            # the case in question happened
 
 
-@pytest.mark.parametrize("behind, free", [(-0.01, True), (0.03, False)])
+@pytest.mark.parametrize("behind, free", [(-0.01, True), (0.0, True), (0.03, False)])
 def test_sitting_collision_test_rejects_knees_through_a_seats_front_edge(behind, free):
-    """Sitting's core test (the person from 5 cm below the seat up, 1 cm): sat with the
-    calves 1 cm past a 3 cm seat top's front edge it passes; moved back until they are 3 cm
-    behind it, the tops of the shins cross the top at the knees and it fails (the published
-    scenes' counters and TV units, sat on at their edge), though a 5 cm move frees the whole
-    body (sitting's other test) and no uncut triangle of the shins lies above the band."""
+    """Sitting's test (the body and each limb freed by its own move of at most 2 cm): sat
+    with the calves 1 cm past a 3 cm seat top's front edge, or flush with it, it passes;
+    moved back until they are 3 cm behind it, the knees cross the top and no move of 2 cm
+    frees the body (the published scenes' counters and TV units, sat on at their edge), and
+    the judge rejects it for the same part."""
 
     ex = affordances.build("sitting-human")
-    whole, (depth, above) = affordances.acceptance("sitting")["collision"]
-    assert whole == (0.05, None)
+    tensor = affordances.build_descriptor("sitting-human", example=ex)
     _, calves = seated_reach(ex)
     seat = 0.45
     edge = calves + behind                         # the front edge, ahead of the seat point
     scene = parts_mesh([box_part("seat", (edge - 0.3, 0.0, seat - 0.015), (0.6, 0.8, 0.03))])
     collider = MeshCollider(scene.vertices, scene.faces)
     pose = site_pose(ex, (0.0, 0.0, seat), 0.0)
-    v, f = ex.query.vertices, ex.query.faces
-    z = ex.support_point[2] + above
-    part = Body(*collision.part_above(v, f, z))
-    assert (collider.separation(part, pose, limit=depth) <= depth) == free
-    if not free:
-        assert collider.separation(Body(v, f), pose, limit=0.05) <= 0.05
-        uncut = f[(v[:, 2] > z)[f].all(axis=1)]
-        assert collider.separation(Body(v, uncut), pose, limit=depth) <= depth
+    deep = [collider.penetrates(b, pose, depth)[0] for b, depth in tensor.collision_bodies()]
+    assert (not any(deep)) == free
+    judged = [name for b, depth, name in Judge.for_example(ex).bodies
+              if collider.penetrates(b, pose, depth)[0]]
+    assert judged == ([] if free else ["body"]) and deep[0] == (not free)
 
 
 @pytest.mark.parametrize("example", ["sitting-human", "riding-human"])

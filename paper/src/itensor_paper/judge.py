@@ -18,7 +18,9 @@ Tests, by affordance (each affordance's :class:`~interaction_tensor.affordances.
    something inside the wall. Depth is the shortest move (26 directions, a ladder of lengths)
    that separates the two: at most ``penetration_depth`` = 1 cm for an object, and 2 cm for
    every part of a person (``person_penetration_depth``, ``limb_penetration``): no body part
-   more than 2 cm inside the scene, whose geometry knows nothing of cushions. A person's
+   more than 2 cm inside the scene, whose geometry knows nothing of cushions. On a captured
+   surface its measured noise is allowed on top, by the same rule as detection's
+   (``MeshCollider.penetrates``). A person's
    legs and arms are tested each on its own, so that a verdict says which part goes in
    (each lower leg, more than 5 cm below the seat, and a rider's thighs sloping to the
    knees; each arm, more than 8 cm above the seat and 16 cm to the side of the mid-plane, or
@@ -265,9 +267,13 @@ def tilt_degrees(pose) -> float:
 
 class JudgeScene:
     """The scene as the judge sees it: its triangles (for exact collision), dense seeded
-    surface samples and their KD-tree (for contact, support and what is above or below)."""
+    surface samples and their KD-tree (for contact, support and what is above or below).
+    ``surface_noise`` (m): a captured surface's measured noise, allowed on top of each
+    penetration depth as detection allows it (:meth:`~interaction_tensor.geometry.collision.
+    MeshCollider.penetrates`)."""
 
-    def __init__(self, geometry, spacing: float = 0.01, seed: int = 0):
+    def __init__(self, geometry, spacing: float = 0.01, seed: int = 0,
+                 surface_noise: float = 0.0):
 
         if not geometry.is_mesh:
             raise InputError(getattr(geometry, "source", None),
@@ -277,7 +283,8 @@ class JudgeScene:
         self.normals = sc.normals
         self.tree = cKDTree(self.points)
         self.spacing = spacing
-        self.collider = collision.MeshCollider(geometry.vertices, geometry.faces)
+        self.collider = collision.MeshCollider(geometry.vertices, geometry.faces,
+                                                 noise=surface_noise)
         self.source = getattr(geometry, "source", "<scene>")
         self._ground = GroundMap(self.points)
 
@@ -505,10 +512,10 @@ class Judge:
             reasons.append(f"tilted {tilt:.0f} degrees from upright")
         pen = 0.0
         for body, allowed, name in self.bodies:
-            depth = scene.collider.separation(body, pose, limit=allowed)
+            deep, depth = scene.collider.penetrates(body, pose, allowed)
             if name == "body" or name == "object":
                 pen = max(pen, depth)
-            if depth > allowed:
+            if deep:
                 reasons.append(f"{name} penetrates the scene "
                                + (f"{depth * 100:.0f} cm" if np.isfinite(depth) else "deeply"))
 

@@ -56,12 +56,24 @@ class MeshCollider:
     ----------
     vertices : (N, 3) float, metres
     faces : (F, 3) int
+    noise : how far (m) the triangles stray from the true surface (a captured surface's
+        measured noise, 0 for a model): :meth:`penetrates` allows it on top of any depth
     """
 
-    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, noise: float = 0.0):
         fcl = _fcl()
         self._fcl = fcl
         self.object = fcl.CollisionObject(_bvh(vertices, faces), fcl.Transform())
+        self.noise = float(noise)
+
+    def penetrates(self, body: "Body", pose: np.ndarray, depth: float) -> tuple[bool, float]:
+        """The one penetration rule, for detection's collision test and the judge alike:
+        whether ``body`` at ``pose`` lies more than ``depth`` (m) plus the surface's
+        :attr:`noise` inside the mesh (no tried move of at most that length frees it), and
+        the move that frees it (:meth:`separation` up to that length; ``inf`` past it)."""
+        allowed = depth + self.noise
+        sep = self.separation(body, pose, limit=allowed)
+        return sep > allowed, sep
 
     def collides(self, body: "Body", pose: np.ndarray) -> bool:
         """Whether ``body`` moved by the 4x4 ``pose`` intersects the mesh."""

@@ -87,7 +87,7 @@ class Scene:
         first use), or None for a scene without a mesh."""
         if self._collider is None and self.mesh is not None:
 
-            self._collider = MeshCollider(*self.mesh)
+            self._collider = MeshCollider(*self.mesh, noise=self.surface_noise)
         return self._collider
 
     def ground_level(self, points: np.ndarray, radius: float) -> np.ndarray:
