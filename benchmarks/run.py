@@ -1,6 +1,6 @@
 """Speed and memory of training and detection, against the exact reference in the same run.
 
-    python benchmarks/run.py                     # every case below; about 15 minutes on 2 cores
+    python benchmarks/run.py                     # every case below; about 25 minutes on 2 cores
     python benchmarks/run.py --only detect many  # some of them
     python benchmarks/run.py --protocol          # also the paper's protocol (14 scenes x 8)
 
@@ -22,6 +22,9 @@ Cases:
 - ``demo``: ``itensor demo`` (its picture included) with an empty Numba cache (a fresh
   install) and again;
 - ``memory``: peak resident memory of ``itensor detect`` on a 2 M-point cloud without normals;
+- ``density``: the places of a mesh scene against those of the same scene as clouds from 0.5
+  to 3 times the descriptor's spacing, with and without normals (the demo room and bowl; a
+  YCB mug trained on a plain box, in living-room2, 10 % test points);
 - ``protocol`` (with ``--protocol``): detection of the paper's 8 examples on its 14 scenes.
 """
 
@@ -44,7 +47,7 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 DATA = Path(os.environ.get("ITENSOR_SHARED_DATA", ROOT.parent / "shared" / "data"))
 OUT = ROOT / "results" / "benchmarks"
-CASES = ("train", "detect", "many", "demo", "memory")
+CASES = ("train", "detect", "many", "demo", "memory", "density")
 #: (label, scene, example, sample fraction) of the detection cases
 DETECT = (("demo room, the demo's bowl", "demo", "demo", 0.3),
           ("kitchen5, placing-bowl", "kitchen5", "placing-bowl", 0.3),
@@ -213,6 +216,62 @@ def case_memory(points: int = 2_000_000) -> dict:
             "seconds": round(seconds, 1)}
 
 
+#: (label, scene, descriptor, sample fraction, cloud spacings as multiples of the
+#: descriptor's) of the density case
+DENSITY = (("demo room, the demo's bowl (2 cm)", "demo", "demo", 0.3, (0.5, 1.0, 1.5, 2.0)),
+           ("living-room2, a YCB mug trained on a box (1 cm)", "living-room2", "mug", 0.1,
+            (0.5, 1.0, 2.0, 3.0)))
+
+
+def _mug_on_a_box():
+    """The README's own-pair case: a YCB mug standing on a plain 1.0 x 0.6 m box top."""
+    import interaction_tensor as it
+    from interaction_tensor.examples.procedural import box_part, parts_mesh
+    from interaction_tensor.geometry.load import load_geometry
+
+    mug = load_geometry(DATA / "objects" / "ycb_mug.ply")
+    v = mug.vertices
+    v = v - [(v[:, 0].min() + v[:, 0].max()) / 2, (v[:, 1].min() + v[:, 1].max()) / 2,
+             v[:, 2].min() - 0.5]
+    box = parts_mesh([box_part("box", (0, 0, 0.25), (1.0, 0.6, 0.5))])
+    return it.train(it.Geometry(v, mug.faces), box, affordance="placing-mug")
+
+
+def _same_place(a, b) -> bool:
+    """Whether places ``a`` and ``b`` are the same surface: their boxes overlap across and
+    their heights differ by at most 4 cm."""
+    return bool(np.all(a.lo[:2] <= b.hi[:2] + 0.02) and np.all(b.lo[:2] <= a.hi[:2] + 0.02)
+                and abs(a.centroid[2] - b.centroid[2]) <= 0.04)
+
+
+def case_density(scene_name: str, example: str, fraction: float, factors: list) -> dict:
+    import interaction_tensor as it
+    from interaction_tensor.examples import demo
+    from interaction_tensor.geometry.load import load_geometry
+    from interaction_tensor.geometry.sampling import mesh_area, sample_mesh
+
+    tensor = _mug_on_a_box() if example == "mug" else _descriptor(example)
+    mesh = (demo.build().scene if scene_name == "demo"
+            else load_geometry(DATA / "scenes" / f"{scene_name}.ply"))
+    settings = it.DetectSettings(sample_fraction=fraction, seed=0)
+    t = time.perf_counter()
+    ref = it.detect(mesh, tensor, settings)
+    out = {"mesh": {"places": len(ref.places), "seconds": round(time.perf_counter() - t, 1)}}
+    for factor in factors:
+        spacing = factor * tensor.scene_spacing
+        points, normals = sample_mesh(mesh, round(mesh_area(mesh) / spacing ** 2), 1)
+        for label, cloud in (("normals", np.column_stack([points, normals])),
+                             ("points", points)):
+            t = time.perf_counter()
+            r = it.detect(cloud, tensor, settings)
+            found = sum(any(_same_place(p, q) for q in r.places) for p in ref.places)
+            out[f"{100 * spacing:.1f} cm, {label}"] = {
+                "points": len(points), "measured_cm": round(100 * r.scene.spacing, 2),
+                "places": len(r.places), "mesh_places_found": found,
+                "seconds": round(time.perf_counter() - t, 1)}
+    return out
+
+
 def case_protocol(fraction: float = 0.3) -> dict:
     import interaction_tensor as it
     from interaction_tensor import affordances
@@ -246,7 +305,7 @@ def one(argv: list) -> None:
     if name != "demo":
         _warm()
     fn = {"train": case_train, "detect": case_detect, "many": case_many, "demo": case_demo,
-          "memory": case_memory, "protocol": case_protocol}[name]
+          "memory": case_memory, "protocol": case_protocol, "density": case_density}[name]
     print(json.dumps(fn(*args)))
 
 
@@ -311,6 +370,20 @@ def markdown(res: dict) -> str:
                   f"`itensor detect` at the defaults on a {m['points']:,}-point cloud without "
                   f"normals: peak {m['peak_mb']} MB ({m['bytes_per_point']} bytes a point), "
                   f"{m['seconds']} s.", ""]
+    if "density" in res:
+        lines += ["## Density: a cloud's places against the mesh's", "",
+                  "The same scene as clouds sampled from the mesh (`python benchmarks/run.py "
+                  "--only density`): the places found, and how many of the mesh's places are "
+                  "among them (boxes overlapping across, heights within 4 cm).", "",
+                  "| case | scene | measured spacing cm | places | the mesh's places found "
+                  "| seconds |", "|---|---|---:|---:|---:|---:|"]
+        for label, r in res["density"].items():
+            m = r["mesh"]
+            lines.append(f"| {label} | mesh | | {m['places']} | | {m['seconds']} |")
+            lines += [f"| | cloud, {k} | {v['measured_cm']} | {v['places']} | "
+                      f"{v['mesh_places_found']}/{m['places']} | {v['seconds']} |"
+                      for k, v in r.items() if k != "mesh"]
+        lines.append("")
     if "train" in res:
         lines += ["## Training (median of 3)", "", "| example | seconds |", "|---|---:|"]
         lines += [f"| {k} | {v} |" for k, v in res["train"].items()]
@@ -347,6 +420,9 @@ def main() -> None:
                              for label, scene, example, frac in DETECT}
         elif name == "many":
             res["many"] = run_case("many", "kitchen5", 0.3)
+        elif name == "density":
+            res["density"] = {label: run_case("density", scene, example, frac, list(factors))
+                              for label, scene, example, frac, factors in DENSITY}
         else:
             res[name] = run_case(name)
         print(f"{name}: {time.perf_counter() - t:.0f} s", flush=True)

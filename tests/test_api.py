@@ -267,7 +267,7 @@ def test_an_empty_result_says_why_and_what_to_do(tmp_path):
 
     ex = demo.build()
     bowl = it.train(ex.query, ex.scene_object, affordance="placing-bowl")     # at 1 cm
-    sparse, _ = sample_mesh(ex.scene, int(mesh_area(ex.scene) / 0.03 ** 2), 0)
+    sparse, _ = sample_mesh(ex.scene, int(mesh_area(ex.scene) / 0.06 ** 2), 0)
     result = it.detect(sparse, bowl, sample_fraction=0.1, seed=0)
     assert not result.predictions and len(result.warnings) == 1
     assert "cm apart" in result.warnings[0] and "denser" in result.warnings[0]

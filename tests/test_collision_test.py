@@ -112,13 +112,20 @@ def test_point_clouds_and_descriptors_without_a_depth_skip_the_test(hanging):
     _, tensor = hanging
     scene, top = _desk()
     cloud = it.prepare_scene(it.Geometry(scene.points, normals=scene.normals), 0.01)
-    det = it.detect(cloud, tensor, it.DetectSettings(**OPEN), test_indices=top)
+    # the same test points, found in the cloud's own order
+    on_top = {tuple(p) for p in np.round(scene.points[top], 9)}
+    mine = np.flatnonzero([tuple(p) in on_top for p in np.round(cloud.points, 9)])
+    assert len(mine) == len(top)
+    det = it.detect(cloud, tensor, it.DetectSettings(**OPEN), test_indices=mine)
     assert det.stats["collision_test"] == det.stats["through_test"] == \
         "off (the scene has no triangles)"
     assert len(det.predictions) == 1 and det.places[0].pairs >= 2     # the desk top
+    # untuned, the descriptor carries its own example's collision test and no through test
     bare = affordances.build_descriptor("hanging-hanger", tuned=False)
+    assert bare.collision_tests == ((0.01, None),) and not bare.through
+    assert bare.through_body() is None
+    bare.set_acceptance(bare.threshold(), collision="off")
     assert bare.collision_tests == () and bare.collision_bodies() == []
-    assert not bare.through and bare.through_body() is None
     assert CollisionCheck(it.detect(scene, bare, it.DetectSettings(**OPEN),
                                     test_indices=top[:10])).reason.startswith("off")
 
@@ -414,3 +421,22 @@ def test_a_limbs_test_cuts_a_person_into_its_body_and_limbs(tmp_path):
     for bad in ([(0.02, "arms")], [(0.02, True)], [("limbs", 0.02)]):
         with pytest.raises(ValueError, match="limbs"):
             tensor.set_acceptance(tensor.threshold(), collision=bad)
+
+
+def test_a_descriptor_pickles_and_copies_after_its_collision_test_ran(hanging):
+    """The collision test's python-fcl bodies, cached on the descriptor, cannot be pickled:
+    they are left out and rebuilt, so a descriptor that has run still goes to a Dask worker
+    or a process pool, or is copied, and gives the same result there."""
+    import copy
+    import pickle
+
+    _, tensor = hanging
+    scene, top = _desk()
+    settings = it.DetectSettings(**OPEN)
+    first = it.detect(scene, tensor, settings, test_indices=top[::20])
+    assert tensor.collision_bodies() and first.stats["collision_tests"] > 0
+    for other in (pickle.loads(pickle.dumps(tensor)), copy.deepcopy(tensor)):
+        again = it.detect(scene, other, settings, test_indices=top[::20])
+        assert [p.pose.tolist() for p in again.predictions] == \
+            [p.pose.tolist() for p in first.predictions]
+        assert again.stats["pairs_failing_collision"] == first.stats["pairs_failing_collision"]

@@ -388,8 +388,7 @@ def test_tum_placing_on_desk(tum, placing_tensor, tmp_path):
     result = it.detect(scene, placing_tensor, settings)
     z = np.array([p.position[2] for p in result.predictions])
     on_desk = np.abs(z - 0.72) < 0.05
-    assert on_desk.sum() >= 2, z
-    assert abs(result.predictions[int(np.argmax(on_desk))].position[2] - 0.72) < 0.05
+    assert on_desk[0], z                                  # the desk top is the best place
 
     it.export(result, tmp_path)
     doc = rd.write_input_frame_outputs(result, tmp_path, report.transform, report)

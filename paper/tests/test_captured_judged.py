@@ -17,9 +17,9 @@ rd = pytest.importorskip("interaction_tensor.capture")
 def test_tum_sitting_finds_the_chairs():
     """The sitting example on the TUM frame, as ``itensor detect FRAME sitting-human.npz``
     runs it (the gaussian criterion with its tuned S_aff, the collision test on the frame's
-    triangles): each of its best three places is a valid seat to the judge, on the frame's
+    triangles): each of its best four places is a valid seat to the judge, on the frame's
     own triangles with the frame's measured noise allowed as detection allows it, and both
-    chairs are among them: the seat on a chair's seat (0.45-0.6 m up, not the 0.72 m desk
+    chairs are among them (the others: two stretches of the desk top's front edge): the seat on a chair's seat (0.45-0.6 m up, not the 0.72 m desk
     top), the feet over the floor within reach."""
 
     objects = shared_file("objects/paper_bowl.ply").parent
@@ -28,9 +28,9 @@ def test_tum_sitting_finds_the_chairs():
     assert tensor.threshold("gaussian") == affordances.acceptance("sitting")[
         "gaussian_threshold"] < 0.5
     frame = shared_file("rgbd/tum_desk/depth.png").parent
-    result = it.detect(str(frame), tensor, it.DetectSettings(top_k=3))
+    result = it.detect(str(frame), tensor, it.DetectSettings(top_k=4))
     assert result.settings.criterion == "gaussian" and result.stats["collision_test"] == "on"
-    assert len(result.predictions) == 3, "fewer than three seats found"
+    assert len(result.predictions) == 4, "fewer than four seats found"
     scene = result.scene
     assert scene.surface_noise > 0.002
     judge = Judge.for_example(ex)

@@ -77,6 +77,12 @@ class TrainSettings:
     #: Fraction of the clearance points a placement may violate before detection rejects it
     #: (stored in the descriptor; ours).
     clearance_limit: float = 0.05
+    #: Depth (m) of the collision test a trained descriptor carries (a mesh query only):
+    #: detection rejects a ranked placement whose query no move of this length frees from
+    #: the scene's triangles, the judge's rule for an object. Raised to the example's own
+    #: depth where its query lies deeper in its scene-object, so that the example passes
+    #: its own test. None: no collision test until an acceptance preset sets one (ours).
+    collision_depth: float | None = 0.01
     #: Interior points: points inside the query mesh, at least ``interior_min_depth`` (m)
     #: from its surface, whose depth (at most ``interior_max``) the scene must not come
     #: within: a surface passing through the object (a board through a seated body) meets
@@ -113,6 +119,10 @@ class TrainSettings:
         _check(self.clearance_points >= 0, "clearance_points must be non-negative")
         _check(self.clearance_max > 0, "clearance_max must be positive (metres)")
         _check(0 <= self.clearance_limit <= 1, "clearance_limit must be in [0, 1]")
+        _check(self.collision_depth is None
+               or (isinstance(self.collision_depth, numbers.Real)
+                   and 0 < self.collision_depth <= 0.2),
+               "collision_depth must be None or in (0, 0.2] (metres)")
         _check_seed(self.seed)
         _check(math.isfinite(self.scene_spacing) and MIN_SPACING <= self.scene_spacing <= 1.0,
                f"scene_spacing must be between {MIN_SPACING} and 1 metre (samples cost "

@@ -28,6 +28,7 @@ from interaction_tensor.engine.scoring import (
 from interaction_tensor.errors import InputError, SettingsError
 from interaction_tensor.geometry.collision import (
     Body,
+    MeshCollider,
     part_above,
     person_parts,
     polygon,
@@ -390,6 +391,17 @@ class InteractionTensor:
         self.__dict__.pop("_collision_bodies", None)
         self.__dict__.pop("_through_body", None)
 
+    #: Caches of python-fcl objects, which cannot be pickled or copied: rebuilt on first use.
+    _FCL_CACHES = ("_collision_bodies", "_through_body")
+
+    def __getstate__(self) -> dict:
+        """The descriptor without its collision caches, so that it pickles (a Dask worker, a
+        process pool) and copies after a detection has built them."""
+        return {k: v for k, v in self.__dict__.items() if k not in self._FCL_CACHES}
+
+    def __setstate__(self, state: dict) -> None:
+        self.__dict__.update(state)
+
     def collision_bodies(self) -> list:
         """Detection's collision tests as (:class:`~.collision.Body` of the tested query
         triangles in the training frame, depth m), built once; empty when the descriptor has
@@ -607,7 +619,7 @@ class InteractionTensor:
             contact_distance=float(settings.contact_distance),
             contact_fraction=float(settings.contact_fraction),
             contact_angle=float(settings.contact_angle), through_section=through,
-            ground=ground)
+            ground=ground, collision_tests=_own_collision_tests(query, scene_object, settings))
 
         # 7. calibration: the example scored against a re-sampled copy of itself ----------
         say("calibration")
@@ -1227,6 +1239,26 @@ def _contact_groups(q_pts, q_gap, q_normal, ground, reference, settings: TrainSe
         out_n.append(nrm[members])
         out_g.append(np.full(len(members), new, np.int64))
     return np.concatenate(out_p), np.concatenate(out_g), np.concatenate(out_n)
+
+
+def _own_collision_tests(query: Geometry, scene_object: Geometry,
+                         settings: TrainSettings) -> tuple:
+    """The collision test a descriptor fitted from this example carries: the whole query at
+    most ``settings.collision_depth`` inside the scene, or as deep as the example's own
+    query lies in its scene-object (the shortest freeing move, :meth:`~..geometry.collision.
+    MeshCollider.separation`) where that is deeper, so the example passes its own test.
+    None for a point-cloud query (no triangles to test), for ``collision_depth`` None, and
+    where no move up to 20 cm frees the example (a query built through its scene-object)."""
+    if settings.collision_depth is None or not query.is_mesh:
+        return ()
+    depth = float(settings.collision_depth)
+    if scene_object.is_mesh:
+        own = MeshCollider(scene_object.vertices, scene_object.faces).separation(
+            Body(query.vertices, query.faces), np.eye(4))
+        if not np.isfinite(own):
+            return ()
+        depth = max(depth, own)
+    return ((depth, None),)
 
 
 #: A collision test's ``above`` that tests a person part by part (:attr:`InteractionTensor.collision_tests`).

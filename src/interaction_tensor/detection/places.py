@@ -218,14 +218,19 @@ _FORWARD = np.array([(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in 
                      if (i, j, k) > (0, 0, 0)], np.int64)
 
 
-def place_cell(spacing: float, sample_fraction: float) -> tuple[float, float]:
+def place_cell(spacing: float, sample_fraction: float,
+               surface: float | None = None) -> tuple[float, float]:
     """Edges (m) of the cells that join accepted test points into places, (across, along) the
     affordance's normal. Across: two and a half times the typical distance between test
-    points (``spacing`` / sqrt(``sample_fraction``)), so that the random gaps of the draw
-    do not split a surface, whatever the fraction tested. Along: two spacings, so that
-    surfaces at different heights (a shelf 10 cm above the floor) stay apart."""
+    points (``spacing``, the scene's, / sqrt(``sample_fraction``)), so that the random gaps
+    of the draw do not split a surface, whatever the fraction tested. Along: two of
+    ``surface`` (the descriptor's spacing; the scene's when None or smaller): the test points
+    of a surface lie on it however sparse the scene, so surfaces at different heights (a
+    shelf 10 cm above the floor, a rug's top 7 cm above it) stay apart in a sparse cloud as
+    in the mesh."""
     typical = spacing / np.sqrt(max(sample_fraction, 1e-6))
-    return float(2.5 * typical), float(2.0 * spacing)
+    along = spacing if surface is None else min(spacing, surface)
+    return float(2.5 * typical), float(2.0 * along)
 
 
 def group_places(points: np.ndarray, pair_point: np.ndarray, score: np.ndarray,

@@ -157,7 +157,7 @@ def _finish(scene, tensor, settings, engine, threshold, test_idx, cand, pair_poi
         # accepted pairs grouped into places; the top k: the best pose of each of the best
         # places (one that passes the collision test); every accepted pair has a place, so
         # no radius parts them
-        cell = place_cell(scene.spacing, settings.sample_fraction)
+        cell = place_cell(scene.spacing, settings.sample_fraction, tensor.scene_spacing)
         det.accepted_place, det.places = group_places(scene.points, pair_point, pairs.score,
                                                       acc, cell, tensor.affordance_normal)
         picks = top_k(scene.points, pairs.score[acc], settings.top_k, 0.0,
