@@ -262,18 +262,30 @@ def test_a_saved_result_carries_its_descriptor_for_the_viewer(files, tensor, tmp
 def test_an_empty_result_says_why_and_what_to_do(tmp_path):
     """A cloud much sparser than the descriptor's spacing leaves the placement tests nothing
     to find: the result says so instead of being silently empty; so does a scene with no
-    surface facing the descriptor's way (a wall for a bowl)."""
+    surface facing the descriptor's way (a wall for a bowl). A result found on a cloud more
+    than 3 times sparser, or 1.5 times without its normals, says its places may be missed."""
     from interaction_tensor.geometry.sampling import mesh_area, sample_mesh
 
     ex = demo.build()
     bowl = it.train(ex.query, ex.scene_object, affordance="placing-bowl")     # at 1 cm
-    sparse, _ = sample_mesh(ex.scene, int(mesh_area(ex.scene) / 0.06 ** 2), 0)
+    sparse, normals = sample_mesh(ex.scene, int(mesh_area(ex.scene) / 0.1 ** 2), 0)
     result = it.detect(sparse, bowl, sample_fraction=0.1, seed=0)
     assert not result.predictions and len(result.warnings) == 1
     assert "cm apart" in result.warnings[0] and "denser" in result.warnings[0]
     out = result.save(tmp_path / "sparse")
     assert json.loads((out / "predictions.json").read_text())["stats"]["warnings"] == \
         result.warnings
+    # a result found on a cloud too sparse to trust whole says so, and what to give
+    cloud, normals = sample_mesh(ex.scene, int(mesh_area(ex.scene) / 0.04 ** 2), 0)
+    found = it.detect(np.column_stack([cloud, normals]), bowl, sample_fraction=0.3, seed=0)
+    assert found.predictions and len(found.warnings) == 1, found.warnings
+    assert "times the descriptor's 1.0 cm: places may be missed or split" in found.warnings[0]
+    cloud = sample_mesh(ex.scene, int(mesh_area(ex.scene) / 0.025 ** 2), 0)[0]
+    bare = it.detect(cloud, bowl, sample_fraction=0.3, seed=0)
+    assert bare.scene.normals_estimated and not found.scene.normals_estimated
+    assert bare.predictions and "normals were estimated" in bare.warnings[0]
+    near, normals = sample_mesh(ex.scene, int(mesh_area(ex.scene) / 0.012 ** 2), 0)
+    assert it.detect(near, bowl, sample_fraction=0.05, seed=0).warnings == []
     wall = it.Geometry(np.array([[0, 0, 0], [2, 0, 0], [2, 0, 2], [0, 0, 2.0]]),
                        np.array([[0, 1, 2], [0, 2, 3]]))              # nothing faces up
     result = it.detect(wall, bowl, sample_fraction=0.2, seed=0)

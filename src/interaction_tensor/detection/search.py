@@ -218,6 +218,8 @@ def _finish(scene, tensor, settings, engine, threshold, test_idx, cand, pair_poi
     })
     if engine.rank and not det.predictions:
         det.warnings += empty_result_warnings(det)
+    elif engine.rank:
+        det.warnings += sparse_scene_warnings(det)
     det.stats["warnings"] = list(det.warnings)
     return det
 
@@ -226,6 +228,26 @@ def _finish(scene, tensor, settings, engine, threshold, test_idx, cand, pair_poi
 #: spacing is too sparse for the placement tests, which look for scene points near the
 #: query's surface at that spacing.
 SPARSE_FACTOR = 1.5
+#: Past this many times the descriptor's spacing, a cloud's places may be missed or split
+#: even with its normals (``benchmarks/run.py --only density``: up to 3x they are the mesh's);
+#: past :data:`SPARSE_FACTOR`, when its normals were estimated.
+SPARSE_WARN_FACTOR = 3.0
+
+
+def sparse_scene_warnings(det) -> list:
+    """A line for a result found on a cloud too sparse to trust it whole: places may be
+    missed or split, and what to give instead."""
+    spacing, trained = float(det.scene.spacing), float(det.tensor.scene_spacing)
+    ratio = spacing / trained if trained > 0 else 0.0
+    if ratio > SPARSE_WARN_FACTOR:
+        return [f"the scene's points are {100 * spacing:.1f} cm apart, {ratio:.1f} times the "
+                f"descriptor's {100 * trained:.1f} cm: places may be missed or split; give a "
+                f"denser scan or cloud, or a mesh"]
+    if ratio > SPARSE_FACTOR and getattr(det.scene, "normals_estimated", False):
+        return [f"the scene's normals were estimated from points {100 * spacing:.1f} cm "
+                f"apart, {ratio:.1f} times the descriptor's {100 * trained:.1f} cm: places "
+                f"may be missed; give the cloud's normals (N x 6) or a denser cloud"]
+    return []
 
 
 def empty_result_warnings(det) -> list:

@@ -111,12 +111,27 @@ def buried_samples(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
     return buried
 
 
+#: :func:`estimate_normals` fits each point's plane twice: the second time with the
+#: neighbours within this many nearest-neighbour distances of the first plane through the
+#: point (when at least :data:`NORMAL_REFIT_MIN` are).
+NORMAL_REFIT_SLAB = 1.0
+NORMAL_REFIT_MIN = 5
+
+
+def _least_spread(centred: np.ndarray) -> np.ndarray:
+    """(n, 3) unit directions of least spread of (n, k, 3) centred neighbourhoods."""
+    return np.linalg.eigh(np.einsum("nki,nkj->nij", centred, centred))[1][:, :, 0]
+
+
 def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = None,
                      progress: bool = False, at: np.ndarray | None = None) -> np.ndarray:
-    """Unit normals of a point cloud by PCA of the ``k`` nearest neighbours, 50,000 points
-    at a time (with ``progress``, a progress bar advanced by each: about 15 s a million
-    points on two cores); with ``at`` (indices), at those points only, their neighbours
-    taken from the whole cloud.
+    """Unit normals of a point cloud by PCA of the ``k`` nearest neighbours, fitted again
+    with those near the first plane through the point (a sparse cloud's neighbourhood
+    reaches past a narrow board's top to its edge and underside: at 3 cm, 37 % of a
+    furnished room's up-facing points came out within 15 degrees of up with one fit, 71 %
+    with two), 50,000 points at a time (with ``progress``, a progress bar advanced by
+    each); with ``at`` (indices), at those points only, their neighbours taken from the
+    whole cloud.
 
     The sign is chosen so that normals point to +Z where they are not horizontal
     (normals of clouds are unoriented; callers that need a side use their own rule).
@@ -138,12 +153,19 @@ def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = Non
     try:
         for start in range(0, len(queries), step):
             sl = slice(start, start + step)
-            _, idx = tree.query(queries[sl], k=k, workers=-1)
+            dist, idx = tree.query(queries[sl], k=k, workers=-1)
             nb = points[idx]
-            nb -= nb.mean(axis=1, keepdims=True)
-            cov = np.einsum("nki,nkj->nij", nb, nb)
-            _, vecs = np.linalg.eigh(cov)
-            normals[sl] = vecs[:, :, 0]
+            first = _least_spread(nb - nb.mean(axis=1, keepdims=True))
+            # again with the neighbours near the point's own plane: a narrow board's top
+            # first fitted with its edge and underside, whose points lie off that plane
+            off = np.abs(np.einsum("nki,ni->nk", nb - queries[sl][:, None], first))
+            near = off <= NORMAL_REFIT_SLAB * float(np.median(dist[:, min(1, k - 1)]))
+            weight = near.astype(np.float64)
+            count = weight.sum(axis=1, keepdims=True)
+            centre = np.einsum("nk,nki->ni", weight, nb) / np.maximum(count, 1.0)
+            again = _least_spread((nb - centre[:, None]) * weight[..., None])
+            refit = count[:, 0] >= NORMAL_REFIT_MIN
+            normals[sl] = np.where(refit[:, None], again, first)
             if bar is not None:
                 bar.update(len(idx))
     finally:

@@ -62,6 +62,8 @@ class Scene:
     notes: list = field(default_factory=list, repr=False)
     mesh: tuple | None = field(default=None, repr=False)
     surface_noise: float = 0.0
+    #: whether the normals were estimated (PCA of neighbourhoods; a cloud given without them)
+    normals_estimated: bool = False
     _tree: cKDTree | None = field(default=None, repr=False)
     _grid: object = field(default=None, repr=False)
     _collider: object = field(default=None, repr=False)
@@ -366,6 +368,7 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
     normals = geometry.normals
     if normals is not None and len(normals) != len(points):
         normals = None
+    estimated = normals is None
     notes = list(geometry.notes)
     check_memory(len(points), geometry.source, pairs_per_point=pairs_per_point)
     tree = cKDTree(points)
@@ -392,7 +395,8 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
     # cKDTree costs 32 bytes a point (rebuilt on first use by the other paths)
     del tree
     points, normals = spatially_sorted(points, normals, measured)
-    return Scene(points, normals, measured, geometry.source, False, notes=notes)
+    return Scene(points, normals, measured, geometry.source, False, notes=notes,
+                 normals_estimated=estimated)
 
 
 #: A point cloud this many times denser than the spacing asked for (the descriptor's) is
