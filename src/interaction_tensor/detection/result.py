@@ -193,7 +193,7 @@ class Detection:
                 write_input_frame_outputs(self, tmp, report.transform, report)
             self.stats["seconds"]["export"] = round(time.perf_counter() - t, 4)
             if render:
-                render_outdir(tmp)
+                render_outdir(tmp, normals=self.scene.normals, spacing=self.scene.spacing)
         return outdir
 
     def to_trimesh(self):

@@ -3,7 +3,8 @@
 Surfaces are drawn as dense point samples ("splats": small screen-space disks sized from the
 sample spacing and the depth), lit with Lambert shading from per-point normals (two-sided)
 and outlined with eye-dome lighting computed from the depth buffer. Lines are sampled into
-unlit one-pixel splats. Everything is vectorised NumPy; no OpenGL, display or GPU.
+unlit one-pixel splats. Vectorised NumPy, the z-buffer's splat a Numba kernel; no OpenGL,
+display or GPU.
 """
 
 from __future__ import annotations
@@ -147,13 +148,14 @@ class Canvas:
 
     # ------------------------------------------------------------------ drawing
     def points(self, points, colors, normals=None, size: float | None = None,
-               radius_px: int | None = None, lit: bool = True) -> None:
+               radius_px: int | None = None, lit: bool = True, reference: bool = False) -> None:
         """Splat (N, 3) ``points`` with colours (N, 3) or (3,) uint8.
 
         ``size``: the sample spacing in metres (the splat covers about that much surface);
         or ``radius_px``: a fixed radius in output pixels. ``normals`` (N, 3) are flipped to
         face the camera (two-sided lighting); without normals, or with ``lit=False``, the
-        colour is drawn as is.
+        colour is drawn as is. The z-buffer is filled by a Numba kernel (:mod:`._splat`);
+        ``reference``: by the NumPy reference instead (the same picture, slower).
         """
         pts = np.asarray(points, float)
         if len(pts) == 0:
@@ -189,6 +191,24 @@ class Canvas:
         for r in np.unique(rad):
             sel = np.flatnonzero(rad == r)
             dx, dy = _disk(r)
+            if not reference:
+                from interaction_tensor.outputs._splat import splat
+
+                empty = np.zeros(0, np.float32)
+                winner = np.full(self.w * self.h, -1, np.int64)
+                splat(ix[sel], iy[sel], z[sel].astype(np.float32),
+                      empty if gx is None else gx[sel], empty if gy is None else gy[sel],
+                      dx.astype(np.int64), dy.astype(np.int64), self.w, self.h,
+                      self.depth, winner)
+                flat = np.flatnonzero(winner >= 0)
+                src = sel[winner[flat]]
+                self.albedo[flat] = cols[idx[src]]
+                if nrm is not None:
+                    self.normal[flat] = nrm[src]
+                    self.lit[flat] = True
+                else:
+                    self.lit[flat] = False
+                continue
             step = max(1, 8_000_000 // len(dx))
             for s in range(0, len(sel), step):
                 part = sel[s:s + step]

@@ -256,7 +256,8 @@ def _best_view(scene_pts, scene_size, frame, targets, azimuths, elevation, near_
 
 # --------------------------------------------------------------------------- render.png
 def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: int = 3,
-                  supersample: int = 2, verbose: bool = False) -> Path:
+                  supersample: int = 2, verbose: bool = False,
+                  normals: np.ndarray | None = None, spacing: float | None = None) -> Path:
     """Draw a detection directory into ``render.png`` (or ``out_png``) and return its path.
 
     Panels: an overview of the whole scene from above (points higher than the predictions'
@@ -266,6 +267,9 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
     scene is coloured by the heat map (grey: not accepted) with a colour bar; the query
     object is drawn at each of the ``top_k`` predictions and labelled with its rank, and
     the place it stands for is outlined (the box round the place's accepted test points).
+    ``normals``: the heat map's points' normals (the scene's, in ``heatmap.ply``'s order),
+    which shade them, and ``spacing`` (m), theirs: estimated from the points when not given
+    (:meth:`Detection.save` gives the scene's).
     """
     t0 = time.perf_counter()
     out_png = None if out_png is None else output_path(out_png, "picture (PNG)")
@@ -274,7 +278,7 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
     pts, score = od.points, od.score
     colors = colormap(score, vmin=od.threshold, vmax=1.0)
 
-    spacing = _spacing(pts)
+    spacing = _spacing(pts) if spacing is None else max(float(spacing), 1e-4)
     size = 2.2 * spacing
     positions = np.array([p["position"] for p in od.predictions], float).reshape(-1, 3)
     objs = [o for o in od.objects if o is not None]
@@ -294,9 +298,12 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
     if low.sum() < 100:
         low[:] = True
     cut_note = f", z > {zcut:.2f} m hidden" if zcut < zmax - 0.02 else ""
-    # PCA normals of the drawn points only (the costly step on large scenes)
-    normals = np.zeros_like(pts)
-    normals[low] = estimate_normals(pts[low], k=10)
+    if normals is not None and np.shape(normals) == pts.shape:
+        normals = np.asarray(normals, float)
+    else:
+        # PCA normals of the drawn points only (the costly step on large scenes)
+        normals = np.zeros_like(pts)
+        normals[low] = estimate_normals(pts[low], k=10)
     rng = np.random.default_rng(0)
     frame_idx = np.flatnonzero(low)
     frame_idx = rng.choice(frame_idx, min(len(frame_idx), 4000), replace=False)
