@@ -1247,7 +1247,7 @@ def _own_collision_tests(query: Geometry, scene_object: Geometry,
     most ``settings.collision_depth`` inside the scene, or as deep as the example's own
     query lies in its scene-object (the shortest freeing move, :meth:`~..geometry.collision.
     MeshCollider.separation`) where that is deeper, so the example passes its own test.
-    None for a point-cloud query (no triangles to test), for ``collision_depth`` None, and
+    No test for a point-cloud query (no triangles to test), for ``collision_depth`` None, or
     where no move up to 20 cm frees the example (a query built through its scene-object)."""
     if settings.collision_depth is None or not query.is_mesh:
         return ()

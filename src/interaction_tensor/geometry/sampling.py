@@ -186,8 +186,8 @@ def unique_rows(a: np.ndarray) -> np.ndarray:
 
 
 #: :func:`mean_spacing`: the counting disk's radius in nearest-neighbour distances (about
-#: two spacings), the nearest points that give a centre's local plane, and how far from it
-#: (a fraction of the disk's radius: about half a spacing) a neighbour still counts.
+#: four spacings), the nearest points that give a centre's local plane, and how far from it
+#: (a fraction of the disk's radius: about a spacing) a neighbour still counts.
 DISK_NEIGHBOUR_DISTANCES = 8.0
 PLANE_NEIGHBOURS = 16
 PLANE_SLAB = 0.25
@@ -198,7 +198,7 @@ def mean_spacing(points: np.ndarray, tree: cKDTree | None = None, sample: int = 
     """Sampling spacing (m) of a surface point cloud: 1 / sqrt(points per square metre).
 
     The same meaning as the spacing at which meshes are sampled (count = area / spacing^2).
-    The density is the median number of distinct neighbours within a disk of four
+    The density is the median number of distinct neighbours within a disk of eight
     nearest-neighbour distances, over a random subset of centres; duplicated points (common
     in scans and converted clouds) do not count, nor do those farther than a quarter of the
     disk's radius from the centre's local plane (a PCA of its 16 nearest points): another
@@ -220,8 +220,7 @@ def mean_spacing(points: np.ndarray, tree: cKDTree | None = None, sample: int = 
     radius = DISK_NEIGHBOUR_DISTANCES * float(np.median(nn[np.isfinite(nn)]))
     # each centre's local plane: the normal of least spread of its nearest points
     _, idx = tree.query(centres, k=min(PLANE_NEIGHBOURS, len(points)), workers=-1)
-    q = points[idx] - points[idx].mean(axis=1, keepdims=True)
-    normal = np.linalg.eigh(np.einsum("cki,ckj->cij", q, q))[1][:, :, 0]
+    normal = _least_spread(points[idx] - points[idx].mean(axis=1, keepdims=True))
     # distinct neighbours within the radius and near the plane, counted without a copy of
     # the whole cloud: (centre, micrometre cell) keys of the neighbours, made unique
     lists = tree.query_ball_point(centres, radius, workers=-1)
