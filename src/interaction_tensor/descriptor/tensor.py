@@ -388,8 +388,8 @@ class InteractionTensor:
         if mount_height is not None:
             self.mount_height = (None if isinstance(mount_height, str)
                                  else float(mount_height))
-        self.__dict__.pop("_collision_bodies", None)
-        self.__dict__.pop("_through_body", None)
+        for cache in self._FCL_CACHES:
+            self.__dict__.pop(cache, None)
 
     #: Caches of python-fcl objects, which cannot be pickled or copied: rebuilt on first use.
     _FCL_CACHES = ("_collision_bodies", "_through_body")

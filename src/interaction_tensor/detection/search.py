@@ -243,7 +243,7 @@ def sparse_scene_warnings(det) -> list:
         return [f"the scene's points are {100 * spacing:.1f} cm apart, {ratio:.1f} times the "
                 f"descriptor's {100 * trained:.1f} cm: places may be missed or split; give a "
                 f"denser scan or cloud, or a mesh"]
-    if ratio > SPARSE_FACTOR and getattr(det.scene, "normals_estimated", False):
+    if ratio > SPARSE_FACTOR and det.scene.normals_estimated:
         return [f"the scene's normals were estimated from points {100 * spacing:.1f} cm "
                 f"apart, {ratio:.1f} times the descriptor's {100 * trained:.1f} cm: places "
                 f"may be missed; give the cloud's normals (N x 6) or a denser cloud"]

@@ -201,13 +201,7 @@ class Canvas:
                       dx.astype(np.int64), dy.astype(np.int64), self.w, self.h,
                       self.depth, winner)
                 flat = np.flatnonzero(winner >= 0)
-                src = sel[winner[flat]]
-                self.albedo[flat] = cols[idx[src]]
-                if nrm is not None:
-                    self.normal[flat] = nrm[src]
-                    self.lit[flat] = True
-                else:
-                    self.lit[flat] = False
+                self._paint(flat, sel[winner[flat]], cols[idx], nrm)
                 continue
             step = max(1, 8_000_000 // len(dx))
             for s in range(0, len(sel), step):
@@ -225,13 +219,17 @@ class Canvas:
                     d = d + gx[src] * ddx + gy[src] * ddy
                 np.minimum.at(self.depth, flat, d)
                 win = d <= self.depth[flat]
-                flat, src = flat[win], src[win]
-                self.albedo[flat] = cols[idx[src]]
-                if nrm is not None:
-                    self.normal[flat] = nrm[src]
-                    self.lit[flat] = True
-                else:
-                    self.lit[flat] = False
+                self._paint(flat[win], src[win], cols[idx], nrm)
+
+    def _paint(self, flat, src, cols, nrm) -> None:
+        """Give pixels ``flat`` the colour (and normal, lit) of the splatted points ``src``
+        that won their depth test."""
+        self.albedo[flat] = cols[src]
+        if nrm is not None:
+            self.normal[flat] = nrm[src]
+            self.lit[flat] = True
+        else:
+            self.lit[flat] = False
 
     def lines(self, starts, ends, colors, width_px: int = 0) -> None:
         """Draw (N, 3) segments ``starts`` -> ``ends``, unlit, with (N, 3) or (3,) colours."""
