@@ -19,7 +19,7 @@ KEYPOINT_SETS = ("weighted", "uniform")
 BACKENDS = ("auto", "numba", "numpy", "torch")
 #: The placement tests, in the order detection runs them (``DetectSettings.skip_tests``).
 PLACEMENT_TESTS = ("clearance", "contact", "interior", "ground", "feet", "straddle", "mount",
-                   "through", "collision")
+                   "through", "collision", "hangs", "fills")
 #: Smallest sampling spacing (m): finer sampling grows memory as 1 / spacing^2 (a 1e-6 m
 #: spacing asked for gigabytes before any check), and no scan resolves below a millimetre.
 MIN_SPACING = 1e-3

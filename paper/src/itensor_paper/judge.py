@@ -64,7 +64,8 @@ Tests, by affordance (each affordance's :class:`~interaction_tensor.affordances.
    sink). The exhaustive search of every standing mug in the published scenes
    (:mod:`.oracle`) found the tap and basin tests passed by a mug beside a potted plant
    under its leaves (kitchen1), on a desk under a wire rack's foot and on chair seats under a
-   desk's edge (office-desk6): none has a sink.
+   desk's edge (office-desk6): none has a sink. The three tests are the library's
+   (:mod:`interaction_tensor.placement.taps`), which detection asks of ranked poses.
 5. **Through the loop** (hanging). The hook's (the strap's) inner disk must be crossed by the
    scene: the rail, peg, door top or panel edge passes through the loop, so the object hangs
    from it. A hanger standing on a flat top or beside an edge fails. So does one flat
@@ -84,7 +85,9 @@ Tests, by affordance (each affordance's :class:`~interaction_tensor.affordances.
    hangers and bags hooked over board edges once the sheets showed cuts through the hook.
    **Hanging free** (``free``): the object's bottom (its lowest 3 cm) does not rest on a top
    or a floor (5 % of it within 1.5 cm of an up- or down-facing surface): a hanger lying on a
-   chair's star base is not hanging.
+   chair's star base is not hanging. Both are the library's
+   (:mod:`interaction_tensor.placement.hooks`), which detection asks of ranked poses with
+   the opening a descriptor learnt from its example.
 6. **Above the ground** (hanging). The hanging object's lowest point is at most
    ``below_ground`` = 1 cm below the ground: the lowest scene point within 1.5 m. Where the
    scan has a floor, hanging through it is test 1's business; the published office scans
@@ -142,8 +145,6 @@ import functools
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from interaction_tensor import affordances
@@ -151,6 +152,7 @@ from interaction_tensor.errors import InputError
 from interaction_tensor.examples.posing import surface_points
 from interaction_tensor.geometry import collision
 from interaction_tensor.geometry.scene import GroundMap, prepare_scene
+from interaction_tensor.placement import hooks, taps
 
 
 @dataclass(frozen=True)
@@ -177,30 +179,30 @@ class JudgeSettings:
     support_below: float = 0.02
     support_above: float = 0.01
     support_margin: float = 0.01
-    overhead_radius: float = 0.03
-    overhead_range: tuple = (0.02, 0.30)
-    overhead_disk: float = 0.15
-    overhead_max_cover: float = 0.5
+    overhead_radius: float = taps.TAP_RADIUS
+    overhead_range: tuple = taps.TAP_RANGE
+    overhead_disk: float = taps.TAP_DISK
+    overhead_max_cover: float = taps.TAP_MAX_COVER
     overhead_one_side: bool = True
-    overhead_max_angle: float = 150.0
-    basin_radius: float = 0.30
-    basin_height: tuple = (0.02, 0.0)          # above the support, above the rim
-    basin_sectors: int = 5                     # of 8
-    sink_radius: float = 0.15
-    sink_depth: float = 0.45
-    sink_foot: tuple = (0.02, 0.06)            # above the basin's bottom: walls low
-    sink_wall: tuple = (0.08, 0.14)            # and high
-    sink_reach: float = 0.35
-    sink_sectors: int = 33                     # of 36 (10 degrees each)
+    overhead_max_angle: float = taps.TAP_MAX_ANGLE
+    basin_radius: float = taps.BASIN_RADIUS
+    basin_height: tuple = taps.BASIN_HEIGHT     # above the support, above the rim
+    basin_sectors: int = taps.BASIN_SECTORS    # of 8
+    sink_radius: float = taps.SINK_RADIUS
+    sink_depth: float = taps.SINK_DEPTH
+    sink_foot: tuple = taps.SINK_FOOT           # above the basin's bottom: walls low
+    sink_wall: tuple = taps.SINK_WALL           # and high
+    sink_reach: float = taps.SINK_REACH
+    sink_sectors: int = taps.SINK_SECTORS      # of 36 (10 degrees each)
     loop_fraction: float = 0.85
     loop_min_angle: float = 30.0
-    fit_margin: float = 0.01                   # past the loop's inner radius
-    fit_slab: float = 0.015
-    fit_reach: float = 0.30
-    fit_min_samples: int = 2
-    free_band: float = 0.03                    # the object's bottom
-    free_gap: float = 0.015
-    free_fraction: float = 0.05
+    fit_margin: float = hooks.FIT_MARGIN       # past the loop's inner radius
+    fit_slab: float = hooks.FIT_SLAB
+    fit_reach: float = hooks.FIT_REACH
+    fit_min_samples: int = hooks.FIT_MIN_SAMPLES
+    free_band: float = hooks.FREE_BAND          # the object's bottom
+    free_gap: float = hooks.FREE_GAP
+    free_fraction: float = hooks.FREE_FRACTION
     below_ground: float = 0.01
     feet_reach: float = 0.25
     stand_angle: float = 45.0
@@ -292,8 +294,7 @@ class JudgeScene:
     def flat_tree(self) -> cKDTree:
         """A KD-tree of the samples on up- or down-facing surfaces (normal within 45 degrees
         of vertical): tops and floors."""
-        flat = self.points[np.abs(self.normals[:, 2]) >= 0.7]
-        return cKDTree(flat if len(flat) else np.full((1, 3), np.inf))
+        return hooks.flat_tree(self.points, self.normals)
 
     def ground_level(self, centre, radius: float) -> float:
         """The lowest scene point within ``radius`` (m, horizontally, to 10 cm) of ``centre``."""
@@ -332,9 +333,8 @@ class Judge:
                                                          replace=False)
             self.main_contact = self.main_contact[np.sort(keep)]
         self.bodies = self._bodies(query)
-        top = self.samples[:, 2].max()
-        rim = self.samples[self.samples[:, 2] >= top - 0.01]
-        self.opening = np.r_[rim[:, :2].mean(axis=0), top]
+        vessel = taps.Vessel.of(self.samples)        # a container's opening and side
+        self.opening, self.side = vessel.opening, vessel.side
         z0 = self.samples[:, 2].min()
         low = self.samples[self.samples[:, 2] <= z0 + st.feet_height]
         mid = np.median(self.samples[:, 1])
@@ -350,10 +350,9 @@ class Judge:
             self.loop = (np.asarray(centre, float), st.loop_fraction * inner,
                          axis / np.linalg.norm(axis))
             self.loop_inner = float(inner)
-            self.loop_closed = self._loop_closed()
+            self.opening_fit = self._opening()
         if "free" in self.tests:        # the bottom of what hangs: within free_band of its lowest
-            self.hanging_part = self.samples[self.samples[:, 2]
-                                             <= self.samples[:, 2].min() + st.free_band]
+            self.hanging_part = hooks.bottom(self.samples, st.free_band)
         s = self.support_point
         # columns (training frame: x-y box, z range) the astride and legroom tests look in
         self.astride_column = ((s[0] + st.astride_ahead[0], s[0] + st.astride_ahead[1]),
@@ -432,68 +431,32 @@ class Judge:
             self.settings.loop_min_angle))
         return bool(np.any(inside & across))
 
-    def _loop_frame(self):
-        """The loop's in-plane frame (training frame): centre, axis, the in-plane up and
-        side directions."""
-        centre, _, axis = self.loop
-        up = np.array([0.0, 0.0, 1.0]) - axis * axis[2]
-        up /= max(np.linalg.norm(up), 1e-9)
-        return centre, axis, up, np.cross(axis, up)
-
-    def _loop_closed(self) -> np.ndarray:
-        """(36,) float: in each direction (10 degrees each, in the loop's plane, from its
-        centre), how far out the object itself goes on (m; inf where it does not within
-        ``fit_reach``): a strap's legs and its bag close the sides and below; a hook's gap
-        and the room over a hanger's shoulders stay open."""
+    def _opening(self) -> hooks.Opening:
+        """The loop as the library's :func:`~interaction_tensor.placement.hooks.opening`
+        (the one detection builds from a descriptor's section, here from the example's
+        loop)."""
         st = self.settings
-        centre, axis, up, side = self._loop_frame()
-        d = self.samples - centre
-        h = d @ axis
-        x, z = d @ side, d @ up
-        r = np.hypot(x, z)
-        mine = (np.abs(h) <= st.fit_slab) & (r >= 0.9 * self.loop_inner) & (r <= st.fit_reach)
-        closed = np.full(36, np.inf)
-        np.minimum.at(closed, _bins(x[mine], z[mine]), r[mine])
-        return closed
+        centre, _, axis = self.loop
+        return hooks.opening(self.samples, centre, axis, self.loop_inner, st.fit_slab,
+                             st.fit_reach)
 
     def _fits(self, scene: JudgeScene, rot, t) -> bool:
-        """Whether what passes through the loop fits inside it. The scene's surface crossing
-        the loop's plane (samples within a spacing of it) is split into connected pieces;
-        each piece that reaches into the loop's opening must end within ``fit_margin`` of
-        it wherever the object itself goes on around the opening (:meth:`_loop_closed`): a
-        rail, a rod, a peg or a tap's spout lies inside a hook; a shelf board, a desk top
-        or a counter's lip goes on sideways through the hook's wire or the bag's strap,
-        which cannot be put round it (and which the collision test misses where the wire or
-        the strap is thinner than its tolerance)."""
+        """Whether what passes through the loop fits inside it (:func:`.hooks.fits`): a
+        rail, a rod, a peg or a tap's spout lies inside a hook; a shelf board, a desk top or
+        a counter's lip goes on sideways through the hook's wire or the bag's strap, which
+        cannot be put round it (and which the collision test misses where the wire or the
+        strap is thinner than its tolerance)."""
         st = self.settings
-        centre, axis, up, side = self._loop_frame()
-        c = rot @ centre + t
-        near = np.asarray(scene.tree.query_ball_point(c, st.fit_reach), np.int64)
-        d = (scene.points[near] - c) @ rot            # training frame
-        d = d[np.abs(d @ axis) <= scene.spacing]
-        x, z = d @ side, d @ up
-        r = np.hypot(x, z)
-        inside = r <= self.loop_inner
-        if not inside.any():
-            return True
-        pairs = cKDTree(d).query_pairs(1.5 * scene.spacing, output_type="ndarray")
-        graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
-                           shape=(len(d), len(d)))
-        _, label = connected_components(graph, directed=False)
-        through = np.isin(label, np.unique(label[inside]))
-        reach = self.loop_closed[_bins(x[through], z[through])]     # inf: open
-        out = np.isfinite(reach) & (r[through] > self.loop_inner + st.fit_margin)
-        return int(out.sum()) < st.fit_min_samples
+        return hooks.fits(self.opening_fit, rot, t, scene.points, scene.tree, scene.spacing,
+                          st.fit_margin, st.fit_min_samples, st.fit_reach)
 
     def _free(self, scene: JudgeScene, rot, t) -> bool:
-        """Whether the object hangs free: its bottom (``free_band`` above its lowest point)
-        does not rest on an up-facing scene surface (at least ``free_fraction`` of it within
-        ``free_gap`` of one): a hanger lying on a chair's base or a bag standing on the shelf
-        under the edge it is hooked to is not hanging."""
+        """Whether the object hangs free (:func:`.hooks.hangs_free`): a hanger lying on a
+        chair's base or a bag standing on the shelf under the edge it is hooked to is not
+        hanging."""
         st = self.settings
-        q = self.hanging_part @ rot.T + t
-        d, _ = scene.flat_tree.query(q, distance_upper_bound=st.free_gap * 1.01)
-        return float((d <= st.free_gap).mean()) < st.free_fraction
+        return hooks.hangs_free(self.hanging_part @ rot.T + t, scene.flat_tree, st.free_gap,
+                                st.free_fraction)
 
     # ------------------------------------------------------------------ judging
     def judge(self, scene: JudgeScene, pose) -> Verdict:
@@ -622,116 +585,26 @@ class Judge:
         return float(-(eq[:, :2] @ com[:2] + eq[:, 2]).max())
 
     def _overhead(self, scene: JudgeScene, opening) -> bool:
+        """A tap's spout above the opening (:func:`.taps.tap_above`)."""
         st = self.settings
-        lo, hi = opening[2] + st.overhead_range[0], opening[2] + st.overhead_range[1]
-        idx = np.asarray(scene.tree.query_ball_point(opening + [0, 0, (lo + hi) / 2 - opening[2]],
-                                                     np.hypot(st.overhead_disk, (hi - lo) / 2)),
-                         np.int64)
-        p = scene.points[idx]
-        p = p[(p[:, 2] >= lo) & (p[:, 2] <= hi)]
-        r = np.linalg.norm(p[:, :2] - opening[:2], axis=1)
-        if not (r <= st.overhead_radius).any():
-            return False
-        disk = p[r <= st.overhead_disk]
-        cell = 0.02
-        cells = np.unique(np.floor(disk[:, :2] / cell).astype(np.int64), axis=0)
-        cover = len(cells) * cell ** 2 / (np.pi * st.overhead_disk ** 2)
-        if cover > st.overhead_max_cover:
-            return False
-        if not st.overhead_one_side:
-            return True
-        side = p[(r > st.overhead_radius) & (r <= st.overhead_disk), :2] - opening[:2]
-        angle = np.arctan2(side[:, 1], side[:, 0]) + np.pi              # [0, 2 pi]
-        eighths = np.zeros(8, bool)
-        eighths[np.clip(np.floor(angle / (np.pi / 4)), 0, 7).astype(np.int64)] = True
-        bins = np.unique(np.clip(np.floor(angle / np.radians(10)), 0, 35))
-        return bool(not (eighths[:4] & eighths[4:]).any()
-                    and 10.0 * len(bins) <= st.overhead_max_angle)
+        return taps.tap_above(scene.points, scene.tree, opening, st.overhead_radius,
+                              st.overhead_range, st.overhead_disk, st.overhead_max_cover,
+                              st.overhead_one_side, st.overhead_max_angle)
 
     def _basin(self, scene: JudgeScene, com, support_z: float, rim_z: float) -> int:
-        """Of 8 sectors around the object's axis, how many hold scene surface between its
-        side and ``basin_radius``, from ``basin_height[0]`` above the support to
-        ``basin_height[1]`` above the rim: the walls of a sink, a washbasin or a niche."""
+        """Of 8 sectors round the object's axis, how many hold a basin's walls
+        (:func:`.taps.basin_sectors`)."""
         st = self.settings
-        lo, hi = support_z + st.basin_height[0], rim_z + st.basin_height[1]
-        centre = np.r_[com[:2], (lo + hi) / 2]
-        idx = np.asarray(scene.tree.query_ball_point(
-            centre, float(np.hypot(st.basin_radius, (hi - lo) / 2))), np.int64)
-        p = scene.points[idx]
-        d = p[:, :2] - com[:2]
-        r = np.hypot(d[:, 0], d[:, 1])
-        side = float(np.linalg.norm(self.samples[:, :2] - self.com[:2], axis=1).max())
-        wall = (p[:, 2] >= lo) & (p[:, 2] <= hi) & (r > side + st.spacing) & \
-            (r <= st.basin_radius)
-        sector = np.floor((np.arctan2(d[wall, 1], d[wall, 0]) + np.pi) / (np.pi / 4))
-        return int(len(np.unique(np.clip(sector, 0, 7))))
+        return taps.basin_sectors(scene.points, scene.tree, com, support_z, rim_z, self.side,
+                                  st.spacing, st.basin_radius, st.basin_height)
 
-    def _sink(self, scene: JudgeScene, opening, support_z: float, cell: float = 0.03) -> int:
-        """The most sectors (of 36) closed around a basin bottom near the opening: up-facing
-        samples within ``sink_radius`` of its axis, from ``sink_depth`` below the support to
-        2 cm above it (one per ``cell`` in plan), open above up to the opening (no sample
-        within ``cell`` over them, 2 cm or more higher), each with wall surface (normal at
-        least 37 degrees from vertical) both ``sink_foot`` and ``sink_wall`` above it within
-        ``sink_reach`` in how many of 36 sectors around it."""
+    def _sink(self, scene: JudgeScene, opening, support_z: float) -> int:
+        """The most directions (of 36) closed round a basin bottom near the opening
+        (:func:`.taps.sink_sectors`)."""
         st = self.settings
-        lo, hi = support_z - st.sink_depth, support_z + 0.02
-        c = np.asarray(opening, float)
-        ball = np.asarray(scene.tree.query_ball_point(
-            [c[0], c[1], (lo + hi) / 2], float(np.hypot(st.sink_radius, (hi - lo) / 2))),
-            np.int64)
-        p, n = scene.points[ball], scene.normals[ball]
-        bottom = ((p[:, 2] >= lo) & (p[:, 2] <= hi) & (np.abs(n[:, 2]) >= np.cos(np.radians(25)))
-                  & (np.hypot(p[:, 0] - c[0], p[:, 1] - c[1]) <= st.sink_radius))
-        b = p[bottom]
-        if not len(b):
-            return 0
-        _, first = np.unique(np.floor(b / cell).astype(np.int64), axis=0, return_index=True)
-        b = b[np.sort(first)]
-        # a bottom water can reach: nothing over it (2 cm up to the opening, within a cell):
-        # not a shelf in a cabinet under the counter, not the floor under a seat
-        top = float(c[2])
-        ball = np.asarray(scene.tree.query_ball_point(
-            [c[0], c[1], (lo + top) / 2],
-            float(np.hypot(st.sink_radius + cell, (top - lo) / 2))), np.int64)
-        a = scene.points[ball]
-        a = a[a[:, 2] <= top]
-        open_above = np.ones(len(b), bool)
-        for s in range(0, len(b), 64):
-            bb = b[s:s + 64]
-            dx = a[None, :, 0] - bb[:, None, 0]
-            dy = a[None, :, 1] - bb[:, None, 1]
-            over = (dx * dx + dy * dy <= cell ** 2) & (a[None, :, 2] - bb[:, None, 2] > 0.02)
-            open_above[s:s + 64] = ~over.any(axis=1)
-        b = b[open_above]
-        if not len(b):
-            return 0
-        wlo, whi = b[:, 2].min() + st.sink_foot[0], b[:, 2].max() + st.sink_wall[1]
-        reach = st.sink_radius + st.sink_reach
-        ball = np.asarray(scene.tree.query_ball_point(
-            [c[0], c[1], (wlo + whi) / 2], float(np.hypot(reach, (whi - wlo) / 2))), np.int64)
-        w, wn = scene.points[ball], scene.normals[ball]
-        w = w[(w[:, 2] >= wlo) & (w[:, 2] <= whi) & (np.abs(wn[:, 2]) <= 0.8)]   # walls
-        best = 0
-        for s in range(0, len(b), 32):
-            bb = b[s:s + 32]
-            dx = w[None, :, 0] - bb[:, None, 0]
-            dy = w[None, :, 1] - bb[:, None, 1]
-            h = w[None, :, 2] - bb[:, None, 2]
-            near = dx * dx + dy * dy <= st.sink_reach ** 2
-            sector = np.clip(np.floor((np.arctan2(dy, dx) + np.pi) / (np.pi / 18)),
-                             0, 35).astype(np.int64)
-            # a basin's walls rise from its bottom: wall surface low (its foot) and high, in
-            # the same direction
-            closed = np.ones((len(bb), 36), bool)
-            for lo_h, hi_h in (st.sink_foot, st.sink_wall):
-                rows, cols = np.nonzero(near & (h >= lo_h) & (h <= hi_h))
-                seen = np.zeros((len(bb), 36), bool)
-                seen[rows, sector[rows, cols]] = True
-                closed &= seen
-            best = max(best, int(closed.sum(axis=1).max()))
-            if best == 36:
-                return best
-        return best
+        return taps.sink_sectors(scene.points, scene.normals, scene.tree, opening, support_z,
+                                 st.sink_radius, st.sink_depth, st.sink_foot, st.sink_wall,
+                                 st.sink_reach)
 
     def _feet_gap(self, scene: JudgeScene, feet: list, com,
                   above_ground: float | None = None) -> tuple:
@@ -768,11 +641,6 @@ class Judge:
             else:
                 worst = max(worst, sole - ground)
         return float(worst), None
-
-
-def _bins(x: np.ndarray, z: np.ndarray) -> np.ndarray:
-    """The 10-degree direction bins (0-35) of in-plane offsets ``(x, z)``."""
-    return np.clip(np.floor((np.arctan2(z, x) + np.pi) / (np.pi / 18)), 0, 35).astype(np.int64)
 
 
 def _in_column(points: np.ndarray, column) -> np.ndarray:

@@ -89,11 +89,11 @@ CONTACT_OPTIONS = (("off", CONTACT_DISTANCES[0], CONTACT_FRACTIONS[0], 90.0),) +
 #: The placement tests not tuned here (each chosen on the labelled set:
 #: ``scripts/choose_collision.py``), taken from the affordance's acceptance
 #: (:data:`~interaction_tensor.affordances.acceptances`) and applied as detection does: the ground,
-#: feet, straddle and mount tests to every pair (column ``fixed``), the exact collision and
-#: through-the-hook tests to the pairs judged and ranked (column ``free``,
+#: feet, straddle and mount tests to every pair (column ``fixed``), the exact collision,
+#: through-the-hook, hanging and filling tests to the pairs judged and ranked (column ``free``,
 #: :class:`~interaction_tensor.detection.ranking.CollisionCheck`).
 FIXED_TESTS = ("below_ground", "feet_reach", "straddle", "mount_height", "collision",
-               "through")
+               "through", "hangs", "fills")
 #: The most lenient placement tests tried: the stratification's second key.
 LENIENT = {"limit": max(LIMITS),
            "interior_limit": max(v for v in INTERIOR_LIMITS if v < 1),

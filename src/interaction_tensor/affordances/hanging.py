@@ -45,10 +45,11 @@ AFFORDANCE = Affordance(
     pose=pose,
     # S_aff and the clearance limit tuned on the validation rooms with the tests chosen on the
     # labelled set applied first: the collision test, the through test (something crosses the
-    # hook's opening) and the ground test.
+    # hook's opening), the hanging tests (what crosses fits in the hook, which hangs free;
+    # the judge's) and the ground test.
     acceptance=dict(threshold=0.03, gaussian_threshold=0.16,
                     clearance_limit=0.10, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),
-                    collision=[(0.01, None)], through=True, below_ground=0.01),
+                    collision=[(0.01, None)], through=True, hangs=True, below_ground=0.01),
     judge=JudgeRule(("upright", "penetration", "contact", "loop", "fits", "free", "ground")),
 )

@@ -256,13 +256,21 @@ def _report(args, result, outdir) -> None:
                f"{st['pairs_failing_ground']}, feet {st['pairs_failing_feet']}, straddle "
                f"{st['pairs_failing_straddle']}, mount {st['pairs_failing_mount']}, "
                f"through {st['pairs_failing_through']})")
-    if st["collision_test"] == "on":
+    ranked = [name for name, key in (("collision", "collision_test"),
+                                     ("hanging", "hanging_test"), ("filling", "filling_test"))
+              if st.get(key) == "on"]
+    if ranked:
         spent = " (the tests allowed are spent: fewer predictions)" \
             if st["collision_tests_exhausted"] else ""
         through = f", {st['pairs_with_nothing_through']} of them with nothing through the " \
             "hook" if st["through_test"] == "on" else ""
-        _say(args, f"collision test of the top predictions: {st['collision_tests']} tested, "
-                   f"{st['pairs_failing_collision']} failing{through}{spent} in "
+        hangs = f", {st['pairs_not_hanging']} not hanging from what passes through it" \
+            if "hanging" in ranked else ""
+        fills = f", {st['pairs_not_filling']} with no tap, basin or sink" \
+            if "filling" in ranked else ""
+        which = " and ".join(ranked) + (" tests" if len(ranked) > 1 else " test")
+        _say(args, f"{which} of the top predictions: {st['collision_tests']} tested, "
+                   f"{st['pairs_failing_collision']} failing{through}{hangs}{fills}{spent} in "
                    f"{st['seconds'].get('collision', 0):.2f} s")
     else:
         _say(args, f"collision test {st['collision_test']}")
@@ -300,7 +308,9 @@ def summary(result, outdir) -> dict:
                                   "pairs_failing_interior", "pairs_failing_ground", "pairs_failing_feet",
                                   "pairs_failing_straddle", "pairs_failing_mount",
                                   "pairs_failing_through", "collision_test", "collision_tests",
-                                  "pairs_failing_collision", "pairs_with_nothing_through")},
+                                  "pairs_failing_collision", "pairs_with_nothing_through",
+                                  "hanging_test", "pairs_not_hanging", "filling_test",
+                                  "pairs_not_filling")},
             "candidates_per_second": st.get("candidates_per_second"),
             "pairs_per_second": st.get("pairs_per_second"), "seconds": st["seconds"],
             "predictions": [{"score": p.score, "position": p.position.tolist(),

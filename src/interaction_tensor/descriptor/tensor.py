@@ -46,6 +46,7 @@ from interaction_tensor.geometry.sampling import (
     winding_numbers,
 )
 from interaction_tensor.geometry.scene import Scene
+from interaction_tensor.placement import hooks, taps
 from interaction_tensor.settings import (
     CRITERIA,
     KEYPOINT_SETS,
@@ -61,6 +62,8 @@ FORMAT_VERSION = 3
 READABLE_VERSIONS = (1, 2, 3)
 #: Scene-object normals within this angle of the N_aff line may hold the reference point.
 REFERENCE_NORMAL_DEG = 30.0
+#: Surface samples of the query from which its hook's opening and bottom are measured.
+HOOK_SAMPLES = 20_000
 
 
 @dataclass
@@ -225,6 +228,13 @@ class InteractionTensor:
         :func:`.collision.through_section`), or (0, 3)
     through : whether detection asks the scene to cross the posed ``through_section`` (on
         mesh scenes; hanging)
+    hangs : whether detection asks a ranked placement to hang from what crosses its
+        opening: what crosses fits inside the query's own outline round it (a rail in a
+        hook, not a board's edge going on sideways through the wire) and the query's bottom
+        keeps off tops and floors (:mod:`~interaction_tensor.placement.hooks`; hanging)
+    fills : whether detection asks a ranked placement of the query (a container) to stand
+        where it could be filled: a tap's spout above its opening, a basin round it and a
+        sink under it (:mod:`~interaction_tensor.placement.taps`; filling)
     ground : height (m) of the ground plane of the example, or None
     below_ground : detection rejects a placement whose query object reaches more than this
         (m) below the scene's ground (the lowest scene sample within 1.5 m of it: a hanger
@@ -283,6 +293,8 @@ class InteractionTensor:
     collision_tests: tuple = ()
     through_section: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     through: bool = False
+    hangs: bool = False
+    fills: bool = False
     ground: float | None = None
     below_ground: float | None = None
     feet_reach: float | None = None
@@ -315,6 +327,8 @@ class InteractionTensor:
                        interior_limit: float | None = None, contact: tuple | None = None,
                        collision: tuple | list | str | None = None,
                        through: bool | None = None,
+                       hangs: bool | None = None,
+                       fills: bool | None = None,
                        below_ground: float | str | None = None,
                        feet_reach: float | str | None = None,
                        straddle: dict | str | None = None,
@@ -328,7 +342,9 @@ class InteractionTensor:
         on validation scenes (:func:`interaction_tensor.examples.affordances.acceptance`).
         ``collision`` = (depth, above), or a list of them, sets the collision tests of ranked
         placements (:attr:`collision_tests`; above None: the whole query), ``"off"`` removes
-        them; ``through`` turns the through-the-hook test on or off (:attr:`through`);
+        them; ``through`` turns the through-the-hook test on or off (:attr:`through`), and
+        ``hangs`` the hanging tests (:attr:`hangs`) and ``fills`` the filling tests
+        (:attr:`fills`);
         ``below_ground`` (m) sets the ground test (:attr:`below_ground`) and ``feet_reach``
         (m) the feet test (:attr:`feet_reach`), ``straddle`` (a dict of boxes) the straddle
         test (:attr:`straddle`) and ``mount_height`` (m) the mount test
@@ -379,6 +395,10 @@ class InteractionTensor:
             self.collision_tests = tests
         if through is not None:
             self.through = bool(through)
+        if hangs is not None:
+            self.hangs = bool(hangs)
+        if fills is not None:
+            self.fills = bool(fills)
         if below_ground is not None:
             self.below_ground = None if isinstance(below_ground, str) else float(below_ground)
         if feet_reach is not None:
@@ -439,6 +459,42 @@ class InteractionTensor:
             self.__dict__["_through_body"] = Body(*polygon(self.through_section))
         return self.__dict__["_through_body"]
 
+    def hook_opening(self):
+        """The query's opening round its :attr:`through_section` (training frame, built
+        once: :func:`~interaction_tensor.placement.hooks.opening_of`), or None when the test
+        is off or the example had no section."""
+        if not self.hangs or len(self.through_section) < 3:
+            return None
+        if "_hook_opening" not in self.__dict__:
+            self.__dict__["_hook_opening"] = hooks.opening_of(self._hook_samples(),
+                                                              self.through_section)
+        return self.__dict__["_hook_opening"]
+
+    def hook_bottom(self) -> np.ndarray:
+        """The query's bottom (:func:`~interaction_tensor.placement.hooks.bottom`, training
+        frame, built once): what must hang free."""
+        if "_hook_bottom" not in self.__dict__:
+            self.__dict__["_hook_bottom"] = hooks.bottom(self._hook_samples())
+        return self.__dict__["_hook_bottom"]
+
+    def vessel(self):
+        """The query as a container standing upright (training frame, built once:
+        :class:`~interaction_tensor.placement.taps.Vessel`), or None when the filling
+        tests are off."""
+        if not self.fills:
+            return None
+        if "_vessel" not in self.__dict__:
+            self.__dict__["_vessel"] = taps.Vessel.of(self._hook_samples())
+        return self.__dict__["_vessel"]
+
+    def _hook_samples(self) -> np.ndarray:
+        """Dense samples of the query's surface (its points for a cloud): a hook's wire is
+        a few millimetres thick."""
+        if not self.query_is_mesh:
+            return self.query_vertices
+        return sample_mesh(Geometry(self.query_vertices, self.query_faces), HOOK_SAMPLES,
+                           0)[0]
+
     def acceptance(self) -> dict:
         """What a placement must pass (the paper criterion's threshold and the placement
         tests), as stored in the descriptor."""
@@ -449,7 +505,8 @@ class InteractionTensor:
                 "contact_distance": self.contact_distance,
                 "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
                 "collision_tests": [list(t) for t in self.collision_tests],
-                "through": self.through, "below_ground": self.below_ground,
+                "through": self.through, "hangs": self.hangs, "fills": self.fills,
+                "below_ground": self.below_ground,
                 "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle),
                 "mount_height": self.mount_height}
 
@@ -679,6 +736,7 @@ class InteractionTensor:
             "contact_groups": self.contact_groups, "contact_distance": self.contact_distance,
             "contact_fraction": self.contact_fraction, "contact_angle": self.contact_angle,
             "collision_tests": [list(t) for t in self.collision_tests], "through": self.through,
+            "hangs": self.hangs, "fills": self.fills,
             "ground": self.ground, "below_ground": self.below_ground,
             "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle),
             "mount_height": self.mount_height,
@@ -771,6 +829,7 @@ class InteractionTensor:
             contact_distance=float(header["contact_distance"]),
             contact_fraction=float(header["contact_fraction"]),
             collision_tests=header["collision_tests"], through=header["through"],
+            hangs=header["hangs"], fills=header["fills"],
             through_section=arrays["through_section"],
             ground=header["ground"], below_ground=header["below_ground"],
             feet_reach=header["feet_reach"], straddle=header["straddle"],
@@ -820,6 +879,7 @@ class InteractionTensor:
             "collision": ([{"depth": d, "above": a} for d, a in self.collision_tests]
                           or "off"),
             "through": ({"on": self.through, "section_vertices": int(len(self.through_section))}),
+            "hangs": self.hangs, "fills": self.fills,
             "ground": self.ground, "below_ground": self.below_ground,
             "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle),
             "mount_height": self.mount_height,
@@ -987,6 +1047,10 @@ def validate_descriptor(path, header: dict, arrays: dict):
     through = header.get("through", False)
     if not isinstance(through, bool):
         bad("through", f"must be true or false, got {_short(through)}")
+    hangs, fills = header.get("hangs", False), header.get("fills", False)
+    for name, value in (("hangs", hangs), ("fills", fills)):
+        if not isinstance(value, bool):
+            bad(name, f"must be true or false, got {_short(value)}")
     if len(out["through_section"]) and len(out["through_section"]) < 3:
         bad("through_section", "must be a polygon of at least 3 vertices, or empty")
     vectors = header.get("vectors")
@@ -1022,7 +1086,8 @@ def validate_descriptor(path, header: dict, arrays: dict):
               "contact_distance": header.get("contact_distance", 0.02),
               "contact_fraction": header.get("contact_fraction", 0.25),
               "contact_angle": header.get("contact_angle", 90.0),
-              "collision_tests": tests, "through": through,
+              "collision_tests": tests, "through": through, "hangs": hangs,
+              "fills": fills,
               "ground": None if ground is None else float(ground),
               "below_ground": None if below is None else float(below),
               "feet_reach": None if feet is None else float(feet), "straddle": straddle,

@@ -14,6 +14,7 @@ from interaction_tensor.detection.result import Detection
 from interaction_tensor.engine.backends import resolve_backend
 from interaction_tensor.engine.numba_backend import score_pairs_numba
 from interaction_tensor.engine.scoring import score_pairs
+from interaction_tensor.placement import hooks, taps
 from interaction_tensor.placement.checks import (
     FAILS_COLLISION,
     PLACED,
@@ -23,7 +24,8 @@ from interaction_tensor.placement.checks import (
 
 
 class CollisionCheck:
-    """Detection's exact collision tests of ranked pairs (``DetectSettings.skip_tests`` without ``collision``).
+    """Detection's exact tests of ranked pairs: collision, hanging and filling (those
+    ``DetectSettings.skip_tests`` leaves of ``collision``, ``hangs`` and ``fills``).
 
     A pair is posed (the descriptor's :meth:`~.InteractionTensor.pose`) and tested against
     the scene's mesh with python-fcl. It passes when, for each of the descriptor's
@@ -31,8 +33,13 @@ class CollisionCheck:
     scene's or a move of that test's depth in one of 26 directions frees them
     (:meth:`.MeshCollider.separation`), and, where the descriptor asks for it
     (:attr:`~.InteractionTensor.through`), the scene crosses the posed section of what went
-    through the query in the example (a rail through the hook). Each pair is tested at most
-    once (``state``: -1 untested, 0 passes, 1 fails); a pair that fails loses its acceptance
+    through the query in the example (a rail through the hook). Where the descriptor asks
+    the query to hang (:attr:`~.InteractionTensor.hangs`; on any scene, triangles or not),
+    what crosses its opening must fit inside it and its bottom must hang free
+    (:mod:`~interaction_tensor.placement.hooks`); where it asks the query to be filled
+    (:attr:`~.InteractionTensor.fills`), a tap, a basin and a sink must be there
+    (:mod:`~interaction_tensor.placement.taps`). Each pair is tested at most once
+    (``state``: -1 untested, 0 passes, 1 fails); a pair that fails loses its acceptance
     (``placement`` :data:`~interaction_tensor.placement.checks.FAILS_COLLISION`). At most
     ``Engine.collision_max_tests`` pairs are tested; :meth:`free` answers None once they
     are spent.
@@ -50,8 +57,8 @@ class CollisionCheck:
             self.reason = "off (the scene has no triangles)"
         elif not tensor.collision_bodies() and tensor.through_body() is None:
             self.reason = "off (no query triangles to test)"
-        self.on = self.reason is None
-        if not self.on:
+        self.collides = self.reason is None
+        if not self.collides:
             self.through = self.reason
         elif not tensor.through:
             self.through = "off (the descriptor does not ask for it)"
@@ -59,11 +66,18 @@ class CollisionCheck:
             self.through = "off (the example had nothing through the query)"
         else:
             self.through = "on"
+        self.hang = _status(st.runs("hangs"), tensor.hangs, tensor.hook_opening() is not None,
+                            "the example had nothing through the query")
+        self.fill = _status(st.runs("fills"), tensor.fills, True, "")
+        self.on = self.collides or self.hang == "on" or self.fill == "on"
         self.state = np.full(len(det.pair_point), -1, np.int8) if self.on else None
         self.tests = 0
         self.failed_through = 0
+        self.failed_hanging = 0
+        self.failed_filling = 0
         self.seconds = 0.0
         self.exhausted = False
+        self._flats = None
 
     def free(self, i: int):
         """Whether pair ``i`` passes the tests: True, False, or None when it is not tested
@@ -80,12 +94,24 @@ class CollisionCheck:
         tensor = det.tensor
         pose = tensor.pose(det.scene.points[det.pair_point[i]],
                            2 * np.pi * int(det.pair_orientation[i]) / det.settings.n_orientations)
-        collider = det.scene.collider()
-        through = tensor.through_body()
-        ok = through is None or collider.collides(through, pose)
-        if not ok:
-            self.failed_through += 1
-        for body, depth in tensor.collision_bodies() if ok else ():
+        # cheapest and most rejecting first: through, hanging, filling, then penetration
+        ok = True
+        collider = det.scene.collider() if self.collides else None
+        if collider is not None and tensor.through_body() is not None:
+            ok = collider.collides(tensor.through_body(), pose)
+            if not ok:
+                self.failed_through += 1
+        if ok and self.hang == "on":
+            ok = self._hangs(pose)
+            if not ok:
+                self.failed_hanging += 1
+        if ok and self.fill == "on":
+            scene = det.scene
+            ok = taps.fills(tensor.vessel(), pose[:3, :3], pose[:3, 3], scene.points,
+                            scene.normals, scene.tree, scene.spacing)
+            if not ok:
+                self.failed_filling += 1
+        for body, depth in tensor.collision_bodies() if ok and collider is not None else ():
             if collider.penetrates(body, pose, depth)[0]:
                 ok = False
                 break
@@ -98,14 +124,39 @@ class CollisionCheck:
         self.seconds += time.perf_counter() - t
         return ok
 
+    def _hangs(self, pose: np.ndarray) -> bool:
+        """Whether the query posed by ``pose`` hangs from what crosses its opening:
+        :func:`.hooks.fits` and :func:`.hooks.hangs_free`."""
+        scene, tensor = self.det.scene, self.det.tensor
+        rot, t = pose[:3, :3], pose[:3, 3]
+        if not hooks.fits(tensor.hook_opening(), rot, t, scene.points, scene.tree,
+                          scene.spacing):
+            return False
+        if self._flats is None:
+            self._flats = hooks.flat_tree(scene.points, scene.normals)
+        return hooks.hangs_free(tensor.hook_bottom() @ rot.T + t, self._flats)
+
     def stats(self) -> dict:
         """What the test did, for ``Detection.stats``."""
-        return {"collision_test": "on" if self.on else self.reason,
+        return {"collision_test": "on" if self.collides else self.reason,
                 "collision_tests": self.tests,
                 "pairs_failing_collision": int((self.state == 1).sum()) if self.on else 0,
                 "through_test": self.through,
                 "pairs_with_nothing_through": self.failed_through,
+                "hanging_test": self.hang,
+                "pairs_not_hanging": self.failed_hanging,
+                "filling_test": self.fill,
+                "pairs_not_filling": self.failed_filling,
                 "collision_tests_exhausted": self.exhausted}
+
+
+def _status(runs: bool, asked: bool, possible: bool, why_not: str) -> str:
+    """``on``, or ``off`` with the reason, of one of the ranked tests beside collision."""
+    if not runs:
+        return "off (settings)"
+    if not asked:
+        return "off (the descriptor does not ask for it)"
+    return "on" if possible else f"off ({why_not})"
 
 
 def collision_check(det: "Detection") -> CollisionCheck:

@@ -96,13 +96,21 @@ class Detection:
     #: and what to do (:func:`~.search.empty_result_warnings`)
     warnings: list = field(default_factory=list)
     places: list = field(default_factory=list)
-    #: (A,) the place of each accepted pair (:attr:`accepted` order); None before ranking
-    accepted_place: np.ndarray | None = field(default=None, repr=False)
+    #: (P,) int32 the place of each pair accepted when the places were cut, -1 for the
+    #: others; None before ranking
+    pair_place: np.ndarray | None = field(default=None, repr=False)
 
     @property
     def accepted(self) -> np.ndarray:
         """Indices into the pair arrays of accepted pairs (int32 when they fit)."""
         return accepted_indices(self.pairs.accepted)
+
+    @property
+    def accepted_place(self) -> np.ndarray | None:
+        """(A,) the place of each accepted pair (:attr:`accepted` order; a pair the
+        collision test rejected after the places were cut is no longer accepted); None
+        before ranking."""
+        return None if self.pair_place is None else self.pair_place[self.accepted]
 
     def prediction(self, pair: int, place: int = -1) -> Prediction:
         """The :class:`~.places.Prediction` of pair ``pair`` (an index into the pair arrays)."""
@@ -120,7 +128,7 @@ class Detection:
             raise IndexError(f"place {place} out of range: this result has "
                              f"{len(self.places)} places")
         acc = self.accepted
-        mine = acc[self.accepted_place == place]
+        mine = acc[self.pair_place[acc] == place]
         mine = mine[np.argsort(-self.pairs.score[mine], kind="stable")][:limit]
         return [self.prediction(int(i), place) for i in mine]
 

@@ -158,12 +158,14 @@ def _finish(scene, tensor, settings, engine, threshold, test_idx, cand, pair_poi
         # places (one that passes the collision test); every accepted pair has a place, so
         # no radius parts them
         cell = place_cell(scene.spacing, settings.sample_fraction, tensor.scene_spacing)
-        det.accepted_place, det.places = group_places(scene.points, pair_point, pairs.score,
-                                                      acc, cell, tensor.affordance_normal)
+        place, det.places = group_places(scene.points, pair_point, pairs.score, acc, cell,
+                                         tensor.affordance_normal)
+        det.pair_place = np.full(len(pair_point), -1, np.int32)
+        det.pair_place[acc] = place
         picks = top_k(scene.points, pairs.score[acc], settings.top_k, 0.0,
-                      index=pair_point[acc], group=det.accepted_place,
+                      index=pair_point[acc], group=place,
                       accept=(lambda i: check.free(int(acc[i]))) if check.on else None)
-    det.predictions = [det.prediction(int(acc[i]), int(det.accepted_place[i])) for i in picks]
+        det.predictions = [det.prediction(int(acc[i]), int(place[i])) for i in picks]
     timings["collision"] = check.seconds
     det.heat, det.accepted_count = heat_map(scene, pair_point, pairs.score, pairs.accepted)
     timings["predictions"] = time.perf_counter() - t3

@@ -1,0 +1,177 @@
+"""Hanging's tests of a posed hook (or a strap's loop): what passes through its opening fits
+inside it, and the object hangs free below.
+
+A hanger whose hook lies *along* a desk's or a shelf's edge has the scene crossing its
+opening, so it passes the through test, but the board goes on sideways through the hook's
+wire: no one can hang it there. :func:`fits` splits the scene crossing the opening's plane
+into connected pieces and asks each piece that reaches into the opening to stay inside the
+object's own outline around it (the hook's wire, the strap's legs and bag); a rail, a rod, a
+peg or a tap's spout does, a board's edge along the hook does not, and a board's edge
+*across* the hook leaves through the hook's gap, where the object does not close. A hanger
+lying on a chair's star base, or a bag standing on the shelf under the edge it is hooked
+to, is not hanging: :func:`hangs_free` asks its bottom to keep off up- and down-facing
+surfaces.
+
+The paper's judge applies the same two functions with its own loop (:mod:`itensor_paper.judge`),
+detection with the opening a descriptor learnt from its example (:func:`opening_of`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+#: How far (m) past the object's own outline the scene through its opening may go.
+FIT_MARGIN = 0.01
+#: Half-thickness (m) of the slab about the opening's plane in which the object's outline is
+#: measured.
+FIT_SLAB = 0.015
+#: How far (m) from the opening's centre the outline and the scene's pieces are followed.
+FIT_REACH = 0.30
+#: A placement fails when at least this many scene samples go past the outline.
+FIT_MIN_SAMPLES = 2
+#: Scene samples closer than this (in scene spacings) belong to the same piece.
+FIT_LINK = 2.5
+#: The object's bottom: its samples within this (m) of its lowest point.
+FREE_BAND = 0.03
+#: A bottom sample rests on a surface when one lies within this (m) of it.
+FREE_GAP = 0.015
+#: The object rests (does not hang free) when at least this fraction of its bottom does.
+FREE_FRACTION = 0.05
+#: A scene sample is on an up- or down-facing surface (a top, a floor) when the vertical
+#: component of its unit normal is at least this (within about 45 degrees of vertical).
+FLAT_NORMAL_Z = 0.7
+#: Directions about the opening's centre in which the outline is measured (10 degrees each).
+BINS = 36
+
+
+@dataclass(frozen=True)
+class Opening:
+    """An object's opening in its own frame: ``centre`` (3,) and the unit ``axis`` (3,)
+    normal to its plane; ``up`` and ``side`` span the plane (``up`` as near +Z as the plane
+    allows). Scene samples within ``inside`` (m) of the centre, in the plane, pass through
+    the opening; ``limit`` (BINS,) is how far (m) from the centre the scene may go in each
+    direction (inf where the object does not close round the opening: a hook's gap)."""
+
+    centre: np.ndarray
+    axis: np.ndarray
+    up: np.ndarray
+    side: np.ndarray
+    inside: float
+    limit: np.ndarray
+
+
+def plane_frame(axis) -> tuple:
+    """(axis, up, side): the unit ``axis`` and two unit directions spanning the plane
+    normal to it, ``up`` the nearest to +Z."""
+    axis = np.asarray(axis, float)
+    axis = axis / np.linalg.norm(axis)
+    up = np.array([0.0, 0.0, 1.0]) - axis * axis[2]
+    n = np.linalg.norm(up)
+    up = up / n if n > 1e-9 else np.array([1.0, 0.0, 0.0]) - axis * axis[0]
+    up /= np.linalg.norm(up)
+    return axis, up, np.cross(axis, up)
+
+
+def direction_bins(x: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """The :data:`BINS` direction bins (0 to BINS - 1) of in-plane offsets ``(x, z)``."""
+    return np.clip(np.floor((np.arctan2(z, x) + np.pi) / (2 * np.pi / BINS)),
+                   0, BINS - 1).astype(np.int64)
+
+
+def outline(samples: np.ndarray, centre, axis, up, side, nearest: float = 0.0,
+            slab: float = FIT_SLAB, reach: float = FIT_REACH) -> np.ndarray:
+    """(BINS,) how far out from ``centre`` the object (its surface ``samples``, same frame)
+    first goes on in each direction of the plane, counting its samples within ``slab`` of
+    the plane and between ``nearest`` and ``reach`` of the centre; inf where none do."""
+    d = np.asarray(samples, float) - centre
+    h = d @ axis
+    x, z = d @ side, d @ up
+    r = np.hypot(x, z)
+    mine = (np.abs(h) <= slab) & (r >= nearest) & (r <= reach)
+    out = np.full(BINS, np.inf)
+    np.minimum.at(out, direction_bins(x[mine], z[mine]), r[mine])
+    return out
+
+
+def opening(samples: np.ndarray, centre, axis, inside: float, slab: float = FIT_SLAB,
+            reach: float = FIT_REACH) -> Opening:
+    """The :class:`Opening` of radius ``inside`` (m) about ``centre``, in the plane normal
+    to ``axis``, of an object with surface ``samples`` (same frame). What passes through it
+    may go on past that radius only in the directions where the object does not close round
+    it (its :func:`outline`, from 0.9 of the radius out): a strap's legs and its bag close
+    the sides and below, a hook's wire and the hanger under it close it all round, and only
+    an open hook's gap stays open."""
+    axis, up, side = plane_frame(axis)
+    centre = np.asarray(centre, float)
+    closed = outline(samples, centre, axis, up, side, 0.9 * inside, slab, reach)
+    return Opening(centre, axis, up, side, float(inside),
+                   np.where(np.isfinite(closed), float(inside), np.inf))
+
+
+def opening_of(samples: np.ndarray, section: np.ndarray) -> Opening | None:
+    """The :func:`opening` of a descriptor's query object (surface ``samples``, training
+    frame) round the section of what passed through it in the example (``section`` (K, 3),
+    the descriptor's ``through_section``: the rail widened by a spacing, which fills a
+    hook's opening), or None without a section: centred on the section's centroid, across
+    its plane, as wide as the section."""
+    section = np.asarray(section, float)
+    if len(section) < 3 or len(samples) == 0:
+        return None
+    centre = section.mean(axis=0)
+    axis = np.linalg.svd(section - centre, full_matrices=False)[2][-1]
+    return opening(samples, centre, axis, float(np.linalg.norm(section - centre, axis=1).max()))
+
+
+def fits(opening: Opening, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
+         tree: cKDTree, spacing: float, margin: float = FIT_MARGIN,
+         min_samples: int = FIT_MIN_SAMPLES, reach: float = FIT_REACH) -> bool:
+    """Whether what passes through the opening, posed by ``rot`` (3, 3) and ``t`` (3,),
+    fits inside it. The scene's samples (``points`` and their ``tree``, at ``spacing``)
+    within a spacing of the posed plane and ``reach`` of its centre are split into connected
+    pieces; every piece with a sample within ``opening.inside`` of the centre must keep
+    within the opening's limit, plus ``margin``, in each direction (fewer than
+    ``min_samples`` past it): a rail, a rod, a peg or a tap's spout lies inside a hook; a
+    shelf board, a desk top or a counter's lip goes on sideways through the hook's wire or
+    a bag's strap, which cannot be put round it. True when nothing passes through."""
+    c = rot @ opening.centre + t
+    near = np.asarray(tree.query_ball_point(c, reach), np.int64)
+    d = (points[near] - c) @ rot                      # the opening's (training) frame
+    d = d[np.abs(d @ opening.axis) <= spacing]
+    x, z = d @ opening.side, d @ opening.up
+    r = np.hypot(x, z)
+    inside = r <= opening.inside
+    if not inside.any():
+        return True
+    pairs = cKDTree(d).query_pairs(FIT_LINK * spacing, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
+                       shape=(len(d), len(d)))
+    _, label = connected_components(graph, directed=False)
+    through = np.isin(label, np.unique(label[inside]))
+    out = r[through] > opening.limit[direction_bins(x[through], z[through])] + margin
+    return int(out.sum()) < min_samples
+
+
+def bottom(samples: np.ndarray, band: float = FREE_BAND) -> np.ndarray:
+    """The object's bottom: its ``samples`` within ``band`` (m) of its lowest."""
+    samples = np.asarray(samples, float)
+    return samples[samples[:, 2] <= samples[:, 2].min() + band]
+
+
+def flat_tree(points: np.ndarray, normals: np.ndarray) -> cKDTree:
+    """A KD-tree of the scene samples on up- or down-facing surfaces (tops and floors:
+    :data:`FLAT_NORMAL_Z`)."""
+    flat = np.asarray(points)[np.abs(np.asarray(normals)[:, 2]) >= FLAT_NORMAL_Z]
+    return cKDTree(flat if len(flat) else np.full((1, 3), np.inf))
+
+
+def hangs_free(bottom_posed: np.ndarray, flats: cKDTree, gap: float = FREE_GAP,
+               fraction: float = FREE_FRACTION) -> bool:
+    """Whether a posed object hangs free: fewer than ``fraction`` of its posed bottom
+    samples lie within ``gap`` of a top or a floor (``flats``, :func:`flat_tree`)."""
+    d, _ = flats.query(bottom_posed, distance_upper_bound=gap * 1.01)
+    return float((d <= gap).mean()) < fraction
