@@ -318,3 +318,29 @@ def test_a_hanger_resting_its_bottom_on_a_top_is_not_hanging_free():
                         box_part("box", (0.0, 0.0, low - 0.105), (0.6, 0.3, 0.2))])
     v = judge.judge(JudgeScene(under), np.eye(4))
     assert v.free is False and "rests on a surface below instead of hanging free" in v.reasons
+
+
+@pytest.mark.parametrize("name", ["hanging-hanger", "hanging-handbag", "filling-mug"])
+def test_the_judge_and_detection_share_the_hanging_and_filling_rules(name):
+    from interaction_tensor.placement import hooks, taps
+
+    ex = affordances.build(name)
+    judge = Judge.for_example(ex)
+    tensor = affordances.build_descriptor(name, example=ex)
+    st = JudgeSettings()
+    assert (st.fit_margin, st.fit_slab, st.fit_reach, st.fit_min_samples) == (
+        hooks.FIT_MARGIN, hooks.FIT_SLAB, hooks.FIT_REACH, hooks.FIT_MIN_SAMPLES)
+    assert (st.overhead_radius, st.overhead_range, st.basin_sectors, st.sink_sectors) == (
+        taps.TAP_RADIUS, taps.TAP_RANGE, taps.BASIN_SECTORS, taps.SINK_SECTORS)
+    if name.startswith("hanging"):
+        # detection's opening, learnt from the section of the example's rail, is the
+        # judge's loop within a few millimetres
+        mine, theirs = tensor.hook_opening(), judge.opening_fit
+        assert np.linalg.norm(mine.centre - theirs.centre) < 0.008
+        assert abs(mine.inside - theirs.inside) < 0.004
+        assert abs(abs(mine.axis @ theirs.axis) - 1) < 1e-3
+        assert np.array_equal(np.isfinite(mine.limit), np.isfinite(theirs.limit))
+    else:
+        v = tensor.vessel()
+        assert np.linalg.norm(v.opening - judge.opening) < 0.005
+        assert v.side == pytest.approx(judge.side, abs=0.003)
