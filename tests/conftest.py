@@ -8,6 +8,7 @@ import pytest
 from hypothesis import settings as _hypothesis_settings
 
 import interaction_tensor as it
+from interaction_tensor import affordances
 from interaction_tensor.cli.main import main
 
 # Property-based tests: a fixed-seed sample by default (CI and local runs draw the same
@@ -18,6 +19,14 @@ _hypothesis_settings.register_profile("explore", max_examples=500, deadline=None
 _hypothesis_settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "default"))
 
 from support import corner_example  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def hanging():
+    """The hanger example and its tuned descriptor (one per test module: tests change its
+    acceptance and restore it)."""
+    ex = affordances.build("hanging-hanger")
+    return ex, affordances.build_descriptor("hanging-hanger", example=ex)
 
 
 @pytest.fixture(scope="session")

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import interaction_tensor as it
+from interaction_tensor.errors import InputError
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -39,6 +40,26 @@ def descriptor_with_header(src, dst, drop: str | None = None, **changes):
     raw["header"] = np.frombuffer(json.dumps({**header, **changes}).encode(), np.uint8)
     np.savez(dst, **raw)
     return dst
+
+
+def check_switch_round_trip(tensor, name: str, tmp_path) -> None:
+    """A descriptor's on/off acceptance field ``name`` (on in ``tensor``): written and read
+    back on and off, a file holding something else refused naming it, a file from before
+    the field read as off."""
+    assert getattr(tensor, name) is True and tensor.acceptance()[name] is True
+    path = tensor.save(tmp_path / f"{name}.npz")
+    assert getattr(it.InteractionTensor.load(path), name) is True
+    tensor.set_acceptance(tensor.threshold(), **{name: False})
+    try:
+        off = it.InteractionTensor.load(tensor.save(tmp_path / f"{name}-off.npz"))
+        assert getattr(off, name) is False
+    finally:
+        tensor.set_acceptance(tensor.threshold(), **{name: True})
+    with pytest.raises(InputError, match=name):
+        it.InteractionTensor.load(descriptor_with_header(path, tmp_path / "bad.npz",
+                                                         **{name: "yes"}))
+    old = descriptor_with_header(path, tmp_path / "old.npz", drop=name)
+    assert getattr(it.InteractionTensor.load(old), name) is False
 
 
 def plane(z: float, half: float = 0.1) -> it.Geometry:

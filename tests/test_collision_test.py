@@ -42,12 +42,6 @@ OPEN = dict(threshold=1e-3, skip_tests=("clearance", "contact", "interior", "gro
             top_k=3)
 
 
-@pytest.fixture(scope="module")
-def hanging():
-    ex = affordances.build("hanging-hanger")
-    return ex, affordances.build_descriptor("hanging-hanger", example=ex)
-
-
 def _desk():
     """A 1.2 x 0.6 m desk top, 3 cm thick, its top at 0.75 m, and the indices of the scene
     samples on its top face away from its edges."""

@@ -14,12 +14,11 @@ import pytest
 import interaction_tensor as it
 from interaction_tensor import affordances
 from interaction_tensor.cli.main import _detect_settings, build_parser
-from interaction_tensor.errors import InputError
 from interaction_tensor.examples import shapes
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.placement import taps
 
-from support import descriptor_with_header
+from support import check_switch_round_trip
 
 
 @pytest.fixture(scope="module")
@@ -95,14 +94,7 @@ def test_detection_finds_the_tap_and_not_the_shelf(filling, kitchen):
 
 
 def test_the_setting_survives_a_file_and_a_bad_one_is_refused(filling, tmp_path):
-    _, tensor = filling
-    assert tensor.fills and tensor.acceptance()["fills"] is True
-    path = tensor.save(tmp_path / "f.npz")
-    assert it.InteractionTensor.load(path).fills
-    with pytest.raises(InputError, match="fills"):
-        it.InteractionTensor.load(descriptor_with_header(path, tmp_path / "b.npz", fills="yes"))
-    old = descriptor_with_header(path, tmp_path / "old.npz", drop="fills")
-    assert not it.InteractionTensor.load(old).fills        # a file from before: off
+    check_switch_round_trip(filling[1], "fills", tmp_path)
 
 
 def test_the_cli_skips_the_test():

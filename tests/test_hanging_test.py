@@ -15,21 +15,14 @@ from scipy.spatial import cKDTree
 import interaction_tensor as it
 from interaction_tensor import affordances
 from interaction_tensor.cli.main import _detect_settings, build_parser
-from interaction_tensor.errors import InputError
 from interaction_tensor.examples import shapes
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.placement import hooks
 
-from support import descriptor_with_header
+from support import check_switch_round_trip
 
 #: only the ranked tests and the through test decide
 RANKED_ONLY = ("clearance", "contact", "interior", "ground")
-
-
-@pytest.fixture(scope="module")
-def hanging():
-    ex = affordances.build("hanging-hanger")
-    return ex, affordances.build_descriptor("hanging-hanger", example=ex)
 
 
 def _with(ex, parts) -> it.Scene:
@@ -143,19 +136,7 @@ def test_accepted_pairs_keep_their_places_in_the_saved_result(hanging, room, tmp
 
 
 def test_the_setting_survives_a_file_and_a_bad_one_is_refused(hanging, tmp_path):
-    _, tensor = hanging
-    assert tensor.hangs and tensor.acceptance()["hangs"] is True
-    path = tensor.save(tmp_path / "h.npz")
-    assert it.InteractionTensor.load(path).hangs
-    tensor.set_acceptance(tensor.threshold(), hangs=False)
-    try:
-        assert not it.InteractionTensor.load(tensor.save(tmp_path / "o.npz")).hangs
-    finally:
-        tensor.set_acceptance(tensor.threshold(), hangs=True)
-    with pytest.raises(InputError, match="hangs"):
-        it.InteractionTensor.load(descriptor_with_header(path, tmp_path / "b.npz", hangs=1))
-    old = descriptor_with_header(path, tmp_path / "old.npz", drop="hangs")
-    assert not it.InteractionTensor.load(old).hangs       # a file from before: off
+    check_switch_round_trip(hanging[1], "hangs", tmp_path)
 
 
 def test_the_cli_skips_the_test():

@@ -37,12 +37,6 @@ THROUGH_ONLY = ("clearance", "contact", "interior", "ground", "feet", "straddle"
 
 
 @pytest.fixture(scope="module")
-def hanging():
-    ex = affordances.build("hanging-hanger")
-    return ex, affordances.build_descriptor("hanging-hanger", example=ex)
-
-
-@pytest.fixture(scope="module")
 def room(hanging):
     """The example's rail (along y at the origin), a cabinet (top at 1.6 m) beside it, a desk
     top 3 cm thick (top at 0.75 m) and a wall."""

@@ -488,12 +488,14 @@ class InteractionTensor:
         return self.__dict__["_vessel"]
 
     def _hook_samples(self) -> np.ndarray:
-        """Dense samples of the query's surface (its points for a cloud): a hook's wire is
-        a few millimetres thick."""
+        """Dense samples of the query's surface (its points for a cloud; built once): a
+        hook's wire is a few millimetres thick."""
         if not self.query_is_mesh:
             return self.query_vertices
-        return sample_mesh(Geometry(self.query_vertices, self.query_faces), HOOK_SAMPLES,
-                           0)[0]
+        if "_surface_samples" not in self.__dict__:
+            self.__dict__["_surface_samples"] = sample_mesh(
+                Geometry(self.query_vertices, self.query_faces), HOOK_SAMPLES, 0)[0]
+        return self.__dict__["_surface_samples"]
 
     def acceptance(self) -> dict:
         """What a placement must pass (the paper criterion's threshold and the placement

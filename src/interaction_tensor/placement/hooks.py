@@ -71,8 +71,8 @@ def plane_frame(axis) -> tuple:
     axis = np.asarray(axis, float)
     axis = axis / np.linalg.norm(axis)
     up = np.array([0.0, 0.0, 1.0]) - axis * axis[2]
-    n = np.linalg.norm(up)
-    up = up / n if n > 1e-9 else np.array([1.0, 0.0, 0.0]) - axis * axis[0]
+    if np.linalg.norm(up) <= 1e-9:                 # a level opening: any in-plane direction
+        up = np.array([1.0, 0.0, 0.0]) - axis * axis[0]
     up /= np.linalg.norm(up)
     return axis, up, np.cross(axis, up)
 
