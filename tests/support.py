@@ -92,11 +92,11 @@ def bench_bed_room():
     return it.prepare_scene(parts_mesh(parts), 0.01, seed=0)
 
 
-def stool_counter_room(floor: bool):
-    """A stool (top 0.45 m) and a counter (top 0.9 m, its front edge at x = 0.1), with or
-    without a floor; the lowest thing scanned without one is the furniture's base."""
+def stool_counter_room(floor: bool, counter: float = 0.9):
+    """A stool (top 0.45 m) and a counter (top ``counter`` m, its front edge at x = 0.1),
+    with or without a floor; the lowest thing scanned without one is the furniture's base."""
     parts = [box_part("stool", (2.0, 0.0, 0.225), (0.4, 0.4, 0.45)),
-             box_part("counter", (-0.2, 0.0, 0.45), (0.6, 1.2, 0.9))]
+             box_part("counter", (-0.2, 0.0, counter / 2), (0.6, 1.2, counter))]
     if floor:
         parts.append(box_part("floor", (0.5, 0.0, -0.01), (4.0, 3.0, 0.02)))
     return it.prepare_scene(parts_mesh(parts), 0.01, seed=0)

@@ -3,8 +3,9 @@
 What stood on the example's ground (a seated person's feet) must find something to stand on
 within the reach below it, or the scene's ground where the scan has no floor. These tests
 check the columns it probes against the example, the fast search against a brute-force
-reference, the seats it must keep and the counter tops it must reject (with a floor and
-without one), and the setting's file round trip.
+reference, the seats it must keep (a stool, a counter's edge within reach with the feet
+dangling) and those it must reject (a counter out of reach, a floor's edge, a high ledge),
+and the setting's file round trip.
 """
 
 from __future__ import annotations
@@ -18,7 +19,15 @@ import interaction_tensor as it
 from interaction_tensor import affordances
 from interaction_tensor.detection.search import Engine, detect
 from interaction_tensor.examples.procedural import box_part, parts_mesh
-from interaction_tensor.placement.checks import feet_gaps, standing_groups
+from interaction_tensor.placement.checks import (
+    FAILS_FEET,
+    PLACED,
+    SEAT_REACH,
+    check_placements,
+    feet_gaps,
+    feet_pass,
+    standing_groups,
+)
 
 from support import stool_counter_room
 
@@ -86,13 +95,14 @@ def test_the_gap_is_the_drop_to_the_highest_sample_under_each_foot_or_the_ground
         np.testing.assert_allclose(gap, [soles - over_floor, soles - over_step], atol=1e-9)
 
 
-def test_detection_on_the_counter_room_predicts_no_one_on_the_counter(sitting):
-    """End to end: every pair the score accepts (a low threshold) on the room with a floor;
-    with the feet test no accepted placement has its seat on the counter top."""
-    scene = stool_counter_room(True)
+def test_detection_on_a_counter_out_of_reach_predicts_no_one_on_it(sitting):
+    """End to end: every pair the score accepts (a low threshold) on the room with a floor
+    and a 1.4 m counter; with the feet test no accepted placement has its seat on the
+    counter top (the feet dangle from a seat out of reach)."""
+    scene = stool_counter_room(True, counter=1.4)
     tensor = affordances.build_descriptor("sitting-human")
     tensor.set_acceptance(1e-3)
-    on_top = np.flatnonzero(scene.points[:, 2] > 0.89)
+    on_top = np.flatnonzero(scene.points[:, 2] > 1.39)
     loose = dict(skip_tests=("clearance", "contact", "interior", "collision"), top_k=3)
     det = detect(scene, tensor, it.DetectSettings(**loose), test_indices=on_top[::4],
                  engine=Engine(score_first=True))
@@ -102,7 +112,7 @@ def test_detection_on_the_counter_room_predicts_no_one_on_the_counter(sitting):
     np.testing.assert_array_equal(first.pairs.accepted, det.pairs.accepted)
     assert first.stats["pairs_scored"] == len(first.pair_point) - \
         first.stats["pairs_failing_feet"] < len(first.pair_point)
-    # the feet are 47.5 cm above the floor wherever the seat is on the top: the only
+    # the feet are 97.5 cm above the floor wherever the seat is on the top: the only
     # placements kept have them inside the counter (its faces within reach; the legs go
     # through it: the clearance and collision tests' business, off here)
     kept = np.flatnonzero(det.pairs.accepted)
@@ -116,6 +126,26 @@ def test_detection_on_the_counter_room_predicts_no_one_on_the_counter(sitting):
         skip_tests=loose["skip_tests"] + ("feet",), top_k=3), test_indices=on_top[::4],
         engine=Engine(score_first=True))
     assert det.pairs.accepted.sum() == det.stats["pairs_accepted_by_score"]
+
+
+def test_feet_may_dangle_from_a_seat_within_reach_of_the_ground(sitting):
+    """On the edge of a 0.9 m counter the feet hang 47.5 cm above the floor, past the reach,
+    but the seat is within :data:`.checks.SEAT_REACH` of the ground: a person sits on a desk
+    or a counter so (the blind panel passed them); on a 1.4 m counter the seat is out of
+    reach. Feet with nothing under them past a floor's edge fail however low the seat."""
+    orient = np.zeros(2, np.int64)
+    only = it.DetectSettings(skip_tests=tuple(FEET_ONLY))
+    for counter, kept in ((0.9, PLACED), (1.4, FAILS_FEET)):
+        scene = stool_counter_room(True, counter=counter)
+        points = np.array([[2.0, 0.0, 0.45], [0.0, 0.0, counter]])
+        gaps = feet_gaps(points, orient, sitting, scene, 8)
+        assert gaps[0] <= sitting.feet_reach < 0.4 < gaps[1] < np.inf
+        assert check_placements(points, orient, sitting, only, scene)[1].tolist() \
+            == [PLACED, kept]
+    np.testing.assert_array_equal(
+        feet_pass([0.1, 0.5, 0.5, np.inf, np.inf], [2.0, 1.2, 1.21, 0.0, 0.5], 0.25),
+        [True, True, False, False, False])
+    assert SEAT_REACH == 1.2
 
 
 def test_a_face_beside_the_shins_is_not_something_to_stand_on(sitting):

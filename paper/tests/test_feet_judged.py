@@ -1,5 +1,5 @@
-"""The feet test against the judge's labelled poses: a person on a stool stands, one on a
-counter's edge does not."""
+"""The feet test against the judge's labelled poses: a person on a stool stands, one on the
+edge of a counter out of reach does not."""
 
 from __future__ import annotations
 
@@ -30,11 +30,11 @@ def sitting():
 @pytest.mark.parametrize("floor", [True, False])
 def test_a_person_on_a_stool_stands_and_one_on_a_counter_edge_does_not(sitting, floor):
     """Facing +x (orientation 0): on the stool the feet rest on the floor (or, without a
-    floor, at the height of the lowest thing scanned); on the counter's edge they hang 45 cm
-    in the air, over the floor or over nothing."""
-    scene = stool_counter_room(floor)
+    floor, at the height of the lowest thing scanned); on the edge of a 1.4 m counter they
+    hang 95 cm in the air, over the floor or over nothing, from a seat out of reach."""
+    scene = stool_counter_room(floor, counter=1.4)
     stool = np.array([[2.0, 0.0, 0.45]])
-    counter = np.array([[0.0, 0.0, 0.9]])
+    counter = np.array([[0.0, 0.0, 1.4]])
     points = np.vstack([stool, counter])
     orient = np.zeros(2, np.int64)
     gaps = feet_gaps(points, orient, sitting, scene, 8)

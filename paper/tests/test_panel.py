@@ -149,3 +149,20 @@ def test_panel_sheets_draws_a_panels_own_poses_again_without_their_answers(tmp_p
     assert not (tmp_path / "sheets" / "hanging").exists()
     key = panel.load(tmp_path / "sheets" / "key.csv")
     assert [(p.id, p.answers) for p in key] == [("Q0001", [])]
+
+
+def test_a_new_round_draws_only_poses_the_panel_has_not_shown_all_held_out():
+    rows = _rows()
+    first = panel.shuffled_ids(panel.select(rows, per_affordance=10, seed=3), 5)
+    again = panel.new_round(rows, first, per_affordance=10, seed=7)
+    assert len(again) == 20 and sorted(p.id for p in again) == [f"R{k:04d}"
+                                                                  for k in range(1, 21)]
+    shown = {(p.scene, p.affordance, tuple(np.asarray(p.pose).ravel())) for p in first}
+    assert not any((p.scene, p.affordance, tuple(np.asarray(p.pose).ravel())) in shown
+                   for p in again)
+    assert all(p.held_out for p in again)            # development scenes' poses too
+    assert {p.affordance for p in panel.new_round(rows, first, 10, 7, ["hanging"], "S")} \
+        == {"hanging"}
+    # every pose shown: nothing left to draw
+    assert len(panel.unseen(rows, panel.new_round(rows, [], 100, 1))) == 0
+    assert len(panel.unseen(rows, first)) == len(rows) - 20

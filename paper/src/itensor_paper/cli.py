@@ -9,6 +9,7 @@ when this package is installed and never imports it otherwise.
 
 from __future__ import annotations
 
+import argparse
 from pathlib import Path
 
 from interaction_tensor.cli.common import (
@@ -30,6 +31,13 @@ from itensor_paper.summary import write_summary
 from itensor_paper.tuning import TuneSettings, tune, write
 
 _positive_int = number(int, low=1, what="a positive integer")
+
+
+def _id_letter(text: str) -> str:
+    """A new panel round's id letter: one capital letter."""
+    if len(text) == 1 and "A" <= text <= "Z":
+        return text
+    raise argparse.ArgumentTypeError(f"{text!r} is not one capital letter")
 _examples = examples_option
 _objects_dir = objects_dir
 
@@ -117,11 +125,16 @@ def cmd_panel_sheets(args) -> int:
                                      "panel's CSV")
         with open(path, newline="") as fh:
             rows = list(csv.DictReader(fh))
-        held = sorted({r["scene"] for r in rows} - set(panel.DEVELOPMENT_SCENES))
-        dev = panel.select(rows, args.development, args.seed, scenes=panel.DEVELOPMENT_SCENES)
-        hold = panel.select(rows, args.per_affordance, args.seed + 1, scenes=held,
-                            first_id=len(dev) + 1)
-        poses = panel.shuffled_ids(dev + hold, args.seed + 2)
+        if args.unseen:                     # a new round, held out whole
+            poses = panel.new_round(rows, panel.load(args.unseen), args.per_affordance,
+                                    args.seed, args.affordance, args.prefix)
+        else:
+            held = sorted({r["scene"] for r in rows} - set(panel.DEVELOPMENT_SCENES))
+            dev = panel.select(rows, args.development, args.seed,
+                               scenes=panel.DEVELOPMENT_SCENES)
+            hold = panel.select(rows, args.per_affordance, args.seed + 1, scenes=held,
+                                first_id=len(dev) + 1)
+            poses = panel.shuffled_ids(dev + hold, args.seed + 2)
     panel.draw(poses, args.scenes, objects_dir(args.objects), args.output)
     if not args.quiet:
         print(f"wrote {len(poses)} poses' rating sheets and key.csv into {args.output}")
@@ -260,7 +273,13 @@ def register(sub) -> None:
                                "panel's CSV (its key, or data/panel.csv) to draw its poses "
                                "again for new raters")
     p.add_argument("--affordance", action="append", default=None,
-                   help="with a panel's CSV: only this affordance's poses (repeatable)")
+                   help="with a panel's CSV or --unseen: only this affordance's poses "
+                        "(repeatable)")
+    p.add_argument("--unseen", default=None, metavar="PANEL_CSV",
+                   help="a new round: --per-affordance poses from every scene that this "
+                        "panel has not shown, all held out")
+    p.add_argument("--prefix", default="R", type=_id_letter,
+                   help="with --unseen: the letter of the new round's ids (default R)")
     p.add_argument("-o", "--output", required=True, help="folder of the sheets and the key")
     p.add_argument("--scenes", required=True, help="directory of the run's scene files")
     p.add_argument("--objects", default=None, help="directory of real query objects")

@@ -98,10 +98,14 @@ Tests, by affordance (each affordance's :class:`~interaction_tensor.affordances.
    a step, a foot rail's top, not the face of a cabinet or a desk's side panel beside the
    shins) not above the sole (or, with none under it, the ground: the lowest scene point
    within 1.5 m; feet sunk into a floor are test 1's business) is at most ``feet_reach`` =
-   25 cm below the sole: a bar stool passes, a table top or a counter does not, with the
-   shins along its front or not. A foot with nothing under it more than
-   ``feet_below_ground`` = 5 cm below the ground hangs past the edge of the scan's floor (a
-   person on a floor's edge with the legs in the void under it): "nothing under the feet";
+   25 cm below the sole (a bar stool), or the feet dangle from a seat at most
+   ``seat_above_ground`` = 1.2 m above the ground (the library's
+   :func:`~interaction_tensor.placement.checks.feet_pass`, which detection asks too): the
+   blind panel passed people on a desk's, a table's or a counter's edge with the feet in
+   the air, and rejected them on wardrobes and wall units 2-3 m up. A foot with nothing
+   under it more than ``feet_below_ground`` = 5 cm below the ground hangs past the edge of
+   the scan's floor (a person on a floor's edge with the legs in the void under it):
+   "nothing under the feet";
    so does a foot on a surface more than ``feet_above_ground`` = 0.6 m above the ground (the
    top of a 3 m wall unit with the feet on its lower ledge: no one climbs there from the
    floor to sit; a bar stool's foot rest, 0.2-0.5 m up, is fine).
@@ -152,7 +156,7 @@ from interaction_tensor.errors import InputError
 from interaction_tensor.examples.posing import surface_points
 from interaction_tensor.geometry import collision
 from interaction_tensor.geometry.scene import GroundMap, prepare_scene
-from interaction_tensor.placement import hooks, taps
+from interaction_tensor.placement import checks, hooks, taps
 
 
 @dataclass(frozen=True)
@@ -215,7 +219,7 @@ class JudgeSettings:
     legroom_lateral: tuple = (0.18, 0.35)
     legroom_along: tuple = (-0.10, 0.20)
     legroom_below: tuple = (0.14, 0.02)        # (below, above) the seat
-    seat_above_ground: float = 1.2
+    seat_above_ground: float = checks.SEAT_REACH
     rider_feet_reach: float = 0.65
     max_tilt: float = 15.0                     # degrees
     seed: int = 0
@@ -536,8 +540,13 @@ class Judge:
         if "feet" in self.tests:
             gap, why = self._feet_gap(scene, [moved(f) for f in self.feet], com)
             verdict.feet_gap = gap
-            if not gap <= st.feet_reach:
-                reasons.append(why or "feet out of reach of the floor")
+            seat = moved(self.support_point)
+            verdict.seat_height = float(seat[2]) - scene.ground_level(
+                seat, st.ground_radius + self.radius)
+            if not checks.feet_pass(gap, verdict.seat_height, st.feet_reach,
+                                    st.seat_above_ground):
+                reasons.append(why or f"feet dangle from a seat {verdict.seat_height:.1f} m "
+                               "above the ground: out of reach to sit")
         local_t = (local - t) @ rot            # the scene near the pose, training frame
         if "astride" in self.tests:
             verdict.astride = bool(_in_column(local_t, self.astride_column).any())

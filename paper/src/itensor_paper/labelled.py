@@ -31,6 +31,7 @@ from interaction_tensor.errors import InputError
 from interaction_tensor.examples.posing import surface_points
 from interaction_tensor.geometry.files import atomic_path
 from interaction_tensor.geometry.load import load_geometry
+from interaction_tensor.placement import checks
 from itensor_paper.judge import Judge, JudgeScene, tilt_degrees
 from itensor_paper.rooms import validation
 
@@ -47,7 +48,7 @@ RIDER_SUPPORT_WIDTH = 0.11
 RIDEABLE = re.compile(r"motorbike")
 WIDE_SEAT = re.compile(r"sofa|bed|armchair|dining chair|office chair|bench seat")
 #: Place sites on a high working top (no board above it) where a person could be posed
-#: sitting on the edge with the feet in the air.
+#: sitting on the edge with the feet in the air (valid within reach of the floor).
 HIGH_TOP = re.compile(r"counter|island|breakfast bar|workbench|kitchenette")
 #: How far (m) a board's underside reaches into the top of a hook's opening in the "pushed
 #: up into a board's underside" negatives: past the wire (the example's through-section
@@ -178,6 +179,26 @@ def _nothing_under(scene_points, feet, pose, floor_gap: float = 0.05) -> bool:
     return not np.any((col[:, 2] > floor) & (col[:, 2] <= f[:, 2].min()))
 
 
+def _upper_body_samples(example, below: float = 0.05) -> np.ndarray:
+    """(N, 3) a seated person's surface samples higher than ``below`` under its seat point
+    (the buttocks, the thighs, the body, the arms and the head), training frame."""
+
+    q = surface_points(example.query, 20000)
+    return q[q[:, 2] > example.support_point[2] - below]
+
+
+def _clear_above(scene_points, body, pose, top: float, margin: float = 0.03) -> bool:
+    """Whether no scene sample lies over the posed ``body`` (its horizontal bounding box,
+    ``margin`` wider) between 2 cm above the ``top`` it sits on and 10 cm over its head:
+    nothing on or above the top (a wall cabinet, a shelf, a raised back) where the person
+    sitting on it is."""
+    b = body @ pose[:3, :3].T + pose[:3, 3]
+    lo, hi = b[:, :2].min(axis=0) - margin, b[:, :2].max(axis=0) + margin
+    col = scene_points[np.all((scene_points[:, :2] >= lo) & (scene_points[:, :2] <= hi),
+                              axis=1)]
+    return not np.any((col[:, 2] > top + 0.02) & (col[:, 2] < b[:, 2].max() + 0.1))
+
+
 def _below_hook(example, drop: float = 0.02) -> np.ndarray:
     """(N, 3) a hanging example's surface samples more than ``drop`` below its support point
     (the hanger's body under the hook), training frame."""
@@ -275,16 +296,20 @@ def _validation_poses(ex, name, vs, jscene) -> list:
                 # a solid upholstered back (a ladder-back chair could be straddled)
                 add(site_pose(ex, s.point, a + math.pi), False, "facing the backrest", s.note)
         for s in by["place"][::3]:
-            if s.point[2] > 0.6:
+            ahead = np.array([math.cos(0.3), math.sin(0.3), 0.0])
+            # the top goes on past the calves (near its edge the legs hang over it)
+            if s.point[2] > 0.6 and edge_distance(tree, jscene.points, s.point, ahead,
+                                                  s.point[2]) >= calves:
                 add(site_pose(ex, s.point, 0.3), False, "on a table top, legs through it",
                     s.note)
-        feet = _feet_samples(ex)
+        feet, upper = _feet_samples(ex), _upper_body_samples(ex)
         for s in by["place"]:
             if s.point[2] >= 0.85 and HIGH_TOP.search(s.note):
                 # on the edge of a counter or a workbench, facing out over its nearest edge
                 # with nothing under the feet down to the floor: the thighs on the top, the
                 # calves 1 cm past the edge, the feet 40 cm or more in the air (the
-                # published scenes' kitchens: people on counters)
+                # published scenes' kitchens: people on counters), within reach of the
+                # floor (the blind panel passed people on desks and counters so)
                 angles = np.arange(16) * (math.pi / 8)
                 dirs = np.c_[np.cos(angles), np.sin(angles), np.zeros(16)]
                 reach = np.array([edge_distance(tree, jscene.points, s.point, d, s.point[2])
@@ -293,7 +318,20 @@ def _validation_poses(ex, name, vs, jscene) -> list:
                     pose = site_pose(ex, s.point, float(angles[k]),
                                      (reach[k] + 0.01 - calves) * dirs[k])
                     if _nothing_under(jscene.points, feet, pose):
-                        add(pose, False, "on a high top's edge, feet in the air", s.note)
+                        # valid within reach of the floor, with nothing above the top near
+                        # the body and the edge square across the thighs, under both knees
+                        # (under a wall cabinet, or across a corner with a knee over the
+                        # top, it is neither: left out)
+                        reach_ok = s.point[2] <= checks.SEAT_REACH
+                        side = np.r_[-dirs[k, 1], dirs[k, 0], 0.0]
+                        square = all(abs(edge_distance(tree, jscene.points,
+                                                       s.point + j * knee * side, dirs[k],
+                                                       s.point[2]) - reach[k]) <= 0.02
+                                     for j in (1, -1))
+                        if not reach_ok or (square and _clear_above(jscene.points, upper,
+                                                                    pose, s.point[2])):
+                            add(pose, reach_ok, "on a high top's edge, feet dangling"
+                                + (" within reach" if reach_ok else ", out of reach"), s.note)
                         break
     elif aff == "riding":
         for i, s in enumerate(by["astride"]):
@@ -416,15 +454,16 @@ def generate(objects_dir=None, shared_dir=None, scenes=None, log=print) -> list:
                 out.append(_entry(ex, "validation:judge_traps", site_pose(ex, point, angle),
                                   False, "under a bar, not in a basin", note))
         # people on the edges of the counter block, whose front is flush with its top: the
-        # calves 1 cm off the front, the feet in the air beside it (a judge that took the
-        # front's face under the heels for a floor passed them: office-desk1's desk)
+        # calves 1 cm off the front, the feet in the air beside it, within reach of the
+        # floor (a judge that took the front's face under the heels for a floor found the
+        # feet on it: office-desk1's desk)
         ex = examples["sitting"]
         _, calves = seated_reach(ex)
         for point, angle, note in validation.flush_counter_edges():
             d = np.array([math.cos(angle), math.sin(angle), 0.0])
             out.append(_entry(ex, "validation:judge_traps",
-                              site_pose(ex, point, angle, (0.01 - calves) * d), False,
-                              "on a flush-fronted counter's edge, feet in the air beside its "
+                              site_pose(ex, point, angle, (0.01 - calves) * d), True,
+                              "on a flush-fronted counter's edge, feet dangling beside its "
                               "front", note))
         # people on the stepped units' upper blocks with the feet on the step: a seat with a
         # foot rest 20 cm above the floor, and the top of a tall unit with the feet 1.2 m

@@ -131,13 +131,43 @@ def select(judgements, per_affordance: int = 60, seed: int = 0, affordance_names
     return sorted(out, key=lambda p: p.id)
 
 
-def shuffled_ids(poses, seed: int = 0) -> list:
-    """``poses`` with new ids (``Q0001``, ...) in a seeded random order, so that an id says
-    nothing about where its pose came from."""
+def shuffled_ids(poses, seed: int = 0, prefix: str = "Q") -> list:
+    """``poses`` with new ids (``Q0001``, ... with ``prefix`` Q) in a seeded random order, so
+    that an id says nothing about where its pose came from."""
     order = np.random.default_rng(seed).permutation(len(poses))
     for k, i in enumerate(order):
-        poses[i].id = f"Q{k + 1:04d}"
+        poses[i].id = f"{prefix}{k + 1:04d}"
     return sorted(poses, key=lambda p: p.id)
+
+
+def unseen(judgements, rated, tolerance: float = 1e-4) -> list:
+    """The rows of an evaluation's ``judgements`` whose pose no :class:`PanelPose` of
+    ``rated`` shows (the same scene and affordance, every entry of the 4x4 within
+    ``tolerance``): the poses a new round of raters can be shown."""
+    seen: dict = {}
+    for p in rated:
+        seen.setdefault((p.scene, p.affordance), []).append(np.asarray(p.pose, float).ravel())
+    out = []
+    for r in judgements:
+        if not r.get("pose"):
+            continue
+        mine = seen.get((r["scene"], r["affordance"]))
+        pose = np.array([float(v) for v in r["pose"].split()])
+        if mine is None or np.abs(np.asarray(mine) - pose).max(axis=1).min() > tolerance:
+            out.append(r)
+    return out
+
+
+def new_round(judgements, rated, per_affordance: int, seed: int, affordance_names=None,
+              prefix: str = "R") -> list:
+    """A new round of a panel: :func:`select` from the poses of ``judgements`` that the
+    panel ``rated`` has not shown (:func:`unseen`), from every scene, all held out (the
+    judge's rules were not fixed on them), ids ``prefix``-numbered in a seeded order
+    (``seed + 1``)."""
+    poses = select(unseen(judgements, rated), per_affordance, seed, affordance_names)
+    for p in poses:
+        p.held_out = True
+    return shuffled_ids(poses, seed + 1, prefix)
 
 
 #: The size of one view (pixels); a pose is shown in three.

@@ -242,8 +242,10 @@ class InteractionTensor:
         the floor is); None: no such test
     feet_reach : detection rejects a placement whose standing contacts (the contact groups
         that stood on the example's ground: a seated person's feet) find no scene surface
-        within this (m) below them, nor the scene's ground (a person on a counter top with
-        the feet in the air); None: no such test
+        within this (m) below them, nor the scene's ground, unless they dangle from a seat
+        (the reference point) within :data:`~interaction_tensor.placement.checks.SEAT_REACH`
+        of the ground (a person on a desk's edge passes, one on a wardrobe's top does not;
+        :func:`~interaction_tensor.placement.checks.feet_pass`); None: no such test
     straddle : detection's straddle test (riding), or None: ``{"astride": box or None,
         "legroom": [box, ...]}``, boxes ``((x0, x1), (y0, y1), (z0, z1))`` (m, training frame,
         relative to the reference point, turning with the placement): the scene must have

@@ -63,7 +63,8 @@ FAILS_COLLISION = 4
 #: the scene's ground (:func:`below_ground`).
 FAILS_GROUND = 5
 #: A placement whose standing contacts (a seated person's feet) find nothing to stand on
-#: within the descriptor's ``feet_reach`` below them (:func:`feet_gaps`).
+#: within the descriptor's ``feet_reach`` below them and dangle from a seat out of reach
+#: (:func:`feet_pass`).
 FAILS_FEET = 6
 #: A placement with nothing going on between the legs ahead of the seat, or with the scene
 #: where a leg goes on either side of it: the descriptor's ``straddle`` boxes
@@ -83,6 +84,11 @@ FEET_BELOW_GROUND = 0.05
 #: one climbs to from the floor to sit (the top of a 3 m wall unit with the feet on its
 #: lower ledge; the judge's ``feet_above_ground``).
 FEET_ABOVE_GROUND = 0.6
+#: Highest (m) above the ground a seat may be for the feet to dangle from it (a desk's, a
+#: table's or a counter's edge, on which the blind panel's raters passed a person with the
+#: feet in the air); higher, no one climbs up to sit there. The judge's
+#: ``seat_above_ground``, for sitting and riding alike.
+SEAT_REACH = 1.2
 #: How far (m) beyond the query object's size the ground is looked for around a placement
 #: (the judge's ``ground_radius``).
 GROUND_RADIUS = 1.5
@@ -399,6 +405,18 @@ def feet_gaps_at(feet: list, scene, ground: np.ndarray, tolerance: float = FEET_
     return worst
 
 
+def feet_pass(gaps, seat_heights, reach: float, seat_reach: float = SEAT_REACH) -> np.ndarray:
+    """(P,) bool: the feet test of placements whose standing contacts are ``gaps`` (m) above
+    what they would stand on (:func:`feet_gaps_at`) and whose seat is ``seat_heights`` (m)
+    above the ground. The feet reach a floor, a step or a foot rest (a gap of at most
+    ``reach``), or they dangle from a seat within ``seat_reach`` of the ground; a foot past
+    the edge of the scan's floor or on a ledge no one climbs to (an infinite gap) fails
+    either way."""
+    gaps = np.asarray(gaps, float)
+    return (gaps <= reach) | (np.isfinite(gaps)
+                              & (np.asarray(seat_heights, float) <= seat_reach))
+
+
 def feet_gaps(points, orient, tensor, scene, n_orientations: int) -> np.ndarray:
     """(P,) :func:`feet_gaps_at` of placements (test points (P, 3), orientation indices
     (P,)); -inf for a descriptor without standing contacts."""
@@ -608,7 +626,8 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
     contact (those that kept their clearance), interior (those that also kept their
     contact), ground (when the descriptor has ``below_ground``: the query object no deeper
     than that below the scene's ground), feet (when the descriptor has ``feet_reach``: its
-    standing contacts find something to stand on, :func:`feet_gaps`), straddle (when the
+    standing contacts find something to stand on, or dangle from a seat within reach,
+    :func:`feet_pass`), straddle (when the
     descriptor has ``straddle``: :func:`straddle_passes`) and mount (when it has
     ``mount_height``: the reference point no higher than that above the ground,
     :func:`above_ground`) and through (when the descriptor asks for its through-section to be
@@ -659,7 +678,8 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
     todo = np.flatnonzero(outcome == PLACED)
     if settings.runs("feet") and tensor.feet_reach is not None and len(todo):
         gaps = feet_gaps(points[todo], orient[todo], tensor, scene, n_o)
-        outcome[todo[gaps > tensor.feet_reach]] = FAILS_FEET
+        seat = above_ground(points[todo], tensor, scene)
+        outcome[todo[~feet_pass(gaps, seat, tensor.feet_reach)]] = FAILS_FEET
     todo = np.flatnonzero(outcome == PLACED)
     if settings.runs("straddle") and tensor.straddle is not None and len(todo):
         ok = straddle_passes(points[todo], orient[todo], tensor, scene, n_o, grid)
