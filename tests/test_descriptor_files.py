@@ -201,7 +201,7 @@ def test_a_file_that_is_not_a_descriptor_is_refused_for_what_it_is(tmp_path, con
 
 @pytest.mark.parametrize("example, field, default, good, wrong, wrong_in_file", [
     ("sitting-human", "feet_reach", 0.25, 0.3, (-0.01, 2.0, "on", True), ("far", -1.0, 3.0)),
-    ("riding-human", "mount_height", 1.3, 1.2, (-0.1, 11.0, "high", True),
+    ("riding-human", "mount_height", 1.2, 1.3, (-0.1, 11.0, "high", True),
      ("tall", -1.0, 50.0)),
 ])
 def test_a_height_setting_survives_a_file_and_a_bad_one_is_refused(

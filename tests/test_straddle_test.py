@@ -24,6 +24,7 @@ from interaction_tensor.placement.checks import (
     PLACED,
     SEAT_POINTS,
     SEAT_RADIUS,
+    SEAT_REACH,
     SEAT_REGION_HEIGHT,
     above_ground,
     box_occupied,
@@ -191,7 +192,7 @@ def test_a_rider_on_a_tall_partition_is_out_of_reach_and_one_on_the_bench_is_not
     """Astride the partition's top, facing along it, the rider passes the straddle test (the
     partition between the legs, room on each side) and fails the mount test: the seat is
     2.4 m up (the published kitchens' top riders on their walls)."""
-    assert riding.mount_height == 1.3
+    assert riding.mount_height == SEAT_REACH == 1.2
     points = np.array([[0.0, 0.0, 0.5], [0.0, 1.0, 2.4]])
     orient = np.array([0, 0])
     assert straddle_passes(points, orient, riding, room, 8).tolist() == [True, True]

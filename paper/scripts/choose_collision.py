@@ -68,6 +68,7 @@ from interaction_tensor.descriptor.tensor import LIMBS
 from interaction_tensor.geometry import collision
 from interaction_tensor.geometry.scene import prepare_scene
 from interaction_tensor.placement.checks import (
+    SEAT_REACH,
     above_ground,
     below_ground,
     feet_gaps_poses,
@@ -331,7 +332,9 @@ def main(argv=None) -> int:
             tried_m = [(h, int((oks & (high <= h))[valid].sum()),
                         int((~(oks & (high <= h)))[~valid].sum())) for h in MOUNT_HEIGHTS]
             good = [t for t in tried_m if t[1] == int(valid.sum()) and t[2] > base_m]
-            mount_choice[aff] = max(good, key=lambda t: (t[2], t[0]))[0] if good else None
+            # ties go to the judge's own limit, then to the more lenient height
+            mount_choice[aff] = max(good, key=lambda t: (t[2], t[0] == SEAT_REACH,
+                                                         t[0]))[0] if good else None
             okg = oks & (high <= mount_choice[aff]) if mount_choice[aff] else oks
             for h, kept, rejected in tried_m:
                 mount_table.append(f"| {aff} | {h:g} | {kept}/{int(valid.sum())} | {rejected}/"
