@@ -227,7 +227,8 @@ def write_all(res, out: Path) -> None:
           "than 5 (a scene with no tap, no seat), rejected pairs fill it and count in the "
           "precision above, as the paper's raters saw a top 5 in every scene. Here only the "
           "top poses the method accepted, i.e. what it tells a user: how many, and the share "
-          "the judge finds valid (not the paper's measure; no target is set on it).\n",
+          "the judge finds valid (not the paper's measure, but the one the project's targets "
+          "are set on).\n",
           accepted_markdown(rows),
           "", "## Scenes where the affordance accepted any prediction (any of its examples)\n",
           scenes_markdown(scenes), "",
