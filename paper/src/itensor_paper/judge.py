@@ -540,9 +540,7 @@ class Judge:
         if "feet" in self.tests:
             gap, why = self._feet_gap(scene, [moved(f) for f in self.feet], com)
             verdict.feet_gap = gap
-            seat = moved(self.support_point)
-            verdict.seat_height = float(seat[2]) - scene.ground_level(
-                seat, st.ground_radius + self.radius)
+            verdict.seat_height = self._seat_height(scene, moved(self.support_point))
             if not checks.feet_pass(gap, verdict.seat_height, st.feet_reach,
                                     st.seat_above_ground):
                 reasons.append(why or f"feet dangle from a seat {verdict.seat_height:.1f} m "
@@ -557,9 +555,7 @@ class Judge:
             if not verdict.legroom:
                 reasons.append("no room for a leg on each side of the support")
         if "mount" in self.tests:
-            seat = moved(self.support_point)
-            verdict.seat_height = float(seat[2]) - scene.ground_level(
-                seat, st.ground_radius + self.radius)
+            verdict.seat_height = self._seat_height(scene, moved(self.support_point))
             if verdict.seat_height > st.seat_above_ground:
                 reasons.append(f"seat {verdict.seat_height:.1f} m above the ground: out of "
                                "reach to ride")
@@ -573,6 +569,11 @@ class Judge:
         verdict.reasons = reasons
         verdict.valid = not reasons
         return verdict
+
+    def _seat_height(self, scene: JudgeScene, seat) -> float:
+        """How far (m) the posed seat point is above the ground (the feet and mount tests)."""
+        return float(seat[2]) - scene.ground_level(seat, self.settings.ground_radius
+                                                   + self.radius)
 
     def _support_margin(self, local, z0, samples, com) -> float:
         from scipy.spatial import ConvexHull, QhullError

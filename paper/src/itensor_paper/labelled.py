@@ -295,8 +295,8 @@ def _validation_poses(ex, name, vs, jscene) -> list:
             if math.isfinite(s.width) and re.search("sofa|armchair", s.note):
                 # a solid upholstered back (a ladder-back chair could be straddled)
                 add(site_pose(ex, s.point, a + math.pi), False, "facing the backrest", s.note)
+        ahead = np.array([math.cos(0.3), math.sin(0.3), 0.0])
         for s in by["place"][::3]:
-            ahead = np.array([math.cos(0.3), math.sin(0.3), 0.0])
             # the top goes on past the calves (near its edge the legs hang over it)
             if s.point[2] > 0.6 and edge_distance(tree, jscene.points, s.point, ahead,
                                                   s.point[2]) >= calves:

@@ -29,10 +29,11 @@ Protocol (after the paper's human-marker protocol, section 4.2):
   top predictions**: of the top poses the method itself accepted, the share valid (what a
   user is told; a scene with nothing to accept adds none, so this is not the paper's
   measure, but the one the project's targets are set on, with place recall and false
-  acceptance; its average row pools the affordances' accepted top poses). The average row is otherwise the mean over the five
-  affordances (as the paper's Table 1). The paper's own numbers fit F = 2 P / (1 + P) in
-  every row, i.e. its "accuracy" is the precision of the top predictions with every bottom
-  prediction counted as a true negative: our precision column is the comparable number.
+  acceptance; its average row pools the affordances' accepted top poses). The average row
+  is otherwise the mean over the five affordances (as the paper's Table 1). The paper's own
+  numbers fit F = 2 P / (1 + P) in every row, i.e. its "accuracy" is the precision of the
+  top predictions with every bottom prediction counted as a true negative: our precision
+  column is the comparable number.
 * Sampling experiment (paper, Fig. 8): for the pairs the score accepted with the
   weight-driven and the uniform keypoint sets, the keypoint comparisons needed to reach the
   acceptance threshold (``decided_at``), mean over all of them and over the top 20 % by score.
