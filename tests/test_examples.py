@@ -116,6 +116,28 @@ def test_rider_sits_on_the_seat_hands_on_the_grips_feet_on_the_pegs(real):
         hand = (q[:, 1] * side > 0.15) & (q[:, 0] > 0.15) & (q[:, 2] > 0.8)
         assert gap[hand].min() < 0.02
     assert s[:, 2].min() == pytest.approx(0.0, abs=0.005)      # wheels on the ground
+    left, right, inside = _astride(q, s, sp)
+    assert min(left, right) > 0.4 * (left + right)             # a leg on each side ...
+    assert inside < 0.1 * (left + right + inside)              # ... the motorbike between
+
+
+def _astride(q, s, seat, cell: float = 0.03):
+    """(left, right, inside): the rider's samples below the seat beside the motorbike (in
+    3 cm cells of height and length under the seat, left of the bike's samples in the
+    same cell, right of them, or within its width there)."""
+    def cells(p):
+        d = p[:, [0, 2]] - seat[[0, 2]]
+        m = (np.abs(d[:, 0]) <= 0.4) & (d[:, 1] < -0.05) & (d[:, 1] > -0.45)
+        ij = np.floor(d[m] / cell).astype(np.int64) + [20, 20]
+        return ij[:, 0] * 64 + ij[:, 1], p[m, 1]
+    cs, ys = cells(s)
+    lo, hi = np.full(64 * 64, np.inf), np.full(64 * 64, -np.inf)
+    np.minimum.at(lo, cs, ys)
+    np.maximum.at(hi, cs, ys)
+    cq, yq = cells(q)
+    beside = np.isfinite(lo[cq])
+    left, right = beside & (yq > hi[cq]), beside & (yq < lo[cq])
+    return int(left.sum()), int(right.sum()), int((beside & ~left & ~right).sum())
 
 
 def test_sizes_are_realistic():

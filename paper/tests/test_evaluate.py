@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from interaction_tensor.cli.main import main
 from interaction_tensor.detection.search import Engine
@@ -15,15 +16,16 @@ from interaction_tensor.errors import InputError
 from interaction_tensor.geometry.files import atomic_dir
 from itensor_paper import runner
 from itensor_paper.merge import redraw
+from itensor_paper.pictures import PANEL, TITLE
 from itensor_paper.runner import METHODS, metrics
 
 from paper_support import shared_file
 
 
 def test_metrics_definitions():
-    def j(aff, m, group, valid, accepted=True):
+    def j(aff, m, group, valid, accepted=True, scene="s1"):
         return {"affordance": aff, "method": m, "group": group, "valid": valid,
-                "accepted": accepted}
+                "accepted": accepted, "scene": scene, "example": aff + "-x"}
     # a top 5 of 2 accepted valid poses, 1 accepted invalid, and 2 rejected fillers (one
     # of them valid all the same)
     js = ([j("placing", "Naive", "top", True)] * 2 + [j("placing", "Naive", "top", False)]
@@ -53,6 +55,40 @@ def test_metrics_definitions():
     # pooled, not the mean of the affordances' shares: 3 of 4, not (2/3 + 1) / 2
     rows = metrics(js + [j("hanging", "Naive", "top", True)], ("Naive",))
     assert rows[-1]["accepted_precision"] == pytest.approx(75.0)
+
+
+def test_place_recall_and_false_acceptance():
+    def j(scene, m, group, valid, accepted):
+        return {"affordance": "sitting", "method": m, "group": group, "valid": valid,
+                "accepted": accepted, "scene": scene, "example": "sitting-human"}
+
+    def run(scene, m, any_accepted):
+        return {"scene": scene, "example": "sitting-human", "affordance": "sitting",
+                "method": m, "any_accepted": any_accepted}
+    js = [j("a", "iT", "top", True, True),        # a: a place, and iT reports it
+          j("a", "Naive", "top", False, True),    # ... Naive reports a wrong one
+          j("b", "iT", "top", False, True),       # b: iT reports a wrong place; Naive's
+          j("b", "Naive", "bottom", True, False),  # bottom pose shows b holds one
+          j("c", "iT", "top", False, False),      # c: nothing valid seen, iT accepts none,
+          j("c", "Naive", "top", False, True),    # Naive accepts a wrong one
+          j("d", "iT", "top", False, False),      # d: a place only a search found
+          j("d", "Naive", "top", False, True)]
+    runs = [run(s, m, any(x["accepted"] for x in js if x["scene"] == s and x["method"] == m))
+            for s in "abcd" for m in ("iT", "Naive")]
+    rows = {r["method"]: r for r in metrics(js, ("iT", "Naive"), runs,
+                                            known={("d", "sitting-human")})
+            if r["affordance"] == "sitting"}
+    it, naive = rows["iT"], rows["Naive"]
+    assert (it["runs_finding_place"], it["runs_with_place"]) == (1, 3)     # a of a, b, d
+    assert it["place_recall"] == pytest.approx(100 / 3)
+    assert (it["runs_accepting_falsely"], it["runs_without_place"]) == (0, 1)   # c
+    assert (naive["runs_finding_place"], naive["runs_accepting_falsely"]) == (0, 1)
+    assert naive["false_acceptance"] == pytest.approx(100.0)
+    # without the search, d is a run with no place known: Naive accepting there is false
+    rows = {r["method"]: r for r in metrics(js, ("iT", "Naive"), runs, known=())
+            if r["affordance"] == "average"}
+    assert (rows["Naive"]["runs_accepting_falsely"], rows["Naive"]["runs_without_place"]) == (2, 2)
+    assert (rows["iT"]["runs_finding_place"], rows["iT"]["runs_with_place"]) == (1, 2)
 
 
 def test_evaluate_smoke_on_two_scenes(tmp_path):
@@ -102,13 +138,26 @@ def test_evaluate_smoke_on_two_scenes(tmp_path):
         assert int(r["accepted_top_valid"]) == sum(j["valid"] == "True" for j in said)
     assert "## The top predictions each method accepted" in (out / "table1.md").read_text()
     # the tracked summary: Table 1 written afresh from the verdicts, the judge's figures, one
-    # picture per affordance, and the folder replaced whole by the next summary
+    # picture per affordance and their close-ups, and the folder replaced whole by the next
+    # summary
     summary = tmp_path / "summary"
     assert main(["paper", "summary", str(out), "-o", str(summary), "--quiet"]) == 0
     assert (summary / "table1.md").read_text() == (out / "table1.md").read_text()
     assert (summary / "table1.csv").read_text() == (out / "table1.csv").read_text()
     assert (summary / "judge_accuracy.csv").exists()
-    assert [p.name for p in (summary / "pictures").iterdir()] == ["placing.png"]
+    assert sorted(p.name for p in (summary / "pictures").iterdir()) == ["closeups.png",
+                                                                       "placing.png"]
+    chosen = (summary / "pictures" / "placing.png").read_bytes()
+    scene = next(p.stem.split("__")[1] for p in (out / "pictures").glob("*.png")
+                 if p.read_bytes() == chosen)
+    first = next(int(j["rank"]) - 1 for j in sorted(
+        (j for j in judged if j["method"] == "iT-weighted" and j["group"] == "top"
+         and j["scene"] == scene), key=lambda j: (j["accepted"] != "True", int(j["rank"]))))
+    sheet = np.asarray(Image.open(summary / "pictures" / "placing.png").convert("RGB"))
+    strip = np.asarray(Image.open(summary / "pictures" / "closeups.png").convert("RGB"))
+    w, h = PANEL                       # the close-up: the chosen sheet's panel of its first
+    x, y = first * w, TITLE            # accepted pose
+    assert np.array_equal(strip[:h, :w], sheet[y:y + h, x:x + w])
     assert main(["paper", "summary", str(tmp_path / "nothing"), "-o", str(summary)]) == 2
     assert (summary / "table1.md").exists()
 

@@ -27,6 +27,8 @@ VALID = (40, 170, 70)
 INVALID = (215, 50, 40)
 SCENE = (150, 150, 160)
 PANEL = (360, 300)
+#: Height (px) of a sheet's title, above its first row of panels.
+TITLE = 30
 
 
 def _samples(geometry, spacing: float, seed: int = 0, limit: int = 2_500_000):
@@ -142,11 +144,11 @@ def sheet(path, scene_geometry, query_geometry, poses, valid, captions, title: s
     cols = min(5, len(panels))
     rows = (len(panels) + cols - 1) // cols
     w, h = PANEL
-    img = Image.new("RGB", (cols * w, 30 + rows * (h + 34)), (255, 255, 255))
+    img = Image.new("RGB", (cols * w, TITLE + rows * (h + 34)), (255, 255, 255))
     draw = ImageDraw.Draw(img)
     draw.text((8, 7), title, fill=(20, 20, 20), font=_font(16))
     for i, (panel, cap) in enumerate(zip(panels, captions)):
-        x, y = (i % cols) * w, 30 + (i // cols) * (h + 34)
+        x, y = (i % cols) * w, TITLE + (i // cols) * (h + 34)
         img.paste(Image.fromarray(panel), (x, y))
         draw.rectangle([x, y, x + w - 1, y + h - 1], outline=(210, 210, 210))
         for k, line in enumerate(str(cap).split("\n")[:2]):

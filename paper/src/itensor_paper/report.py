@@ -57,6 +57,18 @@ def accepted_markdown(rows: list[dict], methods=METHODS) -> str:
                    _fmt(r["accepted_precision"])])
 
 
+def places_markdown(rows: list[dict], methods=METHODS) -> str:
+    """Per affordance and method: place recall (runs finding a valid place / runs where one
+    is known, %) and false acceptance (runs accepting anything / runs where none is known,
+    %)."""
+    return _method_grid(
+        rows, methods, lambda m: (f"{m} place recall", f"{m} false acceptance"),
+        lambda r: [f"{r['runs_finding_place']}/{r['runs_with_place']} "
+                   f"({_fmt(r['place_recall'])})",
+                   f"{r['runs_accepting_falsely']}/{r['runs_without_place']} "
+                   f"({_fmt(r['false_acceptance'])})"])
+
+
 def scene_rows(runs: list[dict], methods=METHODS) -> list[dict]:
     """Per affordance and method: the scenes where any of the affordance's examples accepted a
     prediction (``scenes_accepting``) out of the scenes run (``scenes``)."""
@@ -141,7 +153,8 @@ def write_all(res, out: Path) -> None:
     write_csv(out / "table1_detailed.csv", rows,
               ["affordance", "method", "precision", "accuracy", "f_score", "tp", "fp", "tn", "fn",
                "with_accepted", "runs", "accepted_top", "accepted_top_valid",
-               "accepted_precision"])
+               "accepted_precision", "runs_with_place", "runs_finding_place", "place_recall",
+               "runs_without_place", "runs_accepting_falsely", "false_acceptance"])
     write_csv(out / "judge_accuracy.csv", res.judge_accuracy,
               ["affordance", "valid_n", "valid_right", "valid_accuracy", "invalid_n",
                "invalid_right", "invalid_accuracy", "panel_n", "panel_agree",
@@ -230,6 +243,14 @@ def write_all(res, out: Path) -> None:
           "the judge finds valid (not the paper's measure, but the one the project's targets "
           "are set on).\n",
           accepted_markdown(rows),
+          "", "## Place recall and false acceptance\n",
+          ("Per (scene, example) run. Place recall: of the runs where a valid place is known, "
+           "those whose accepted top poses hold one; false acceptance: of the runs where none "
+           "is known, those that accept anything. A place is known where any method's judged "
+           "pose in the run is valid, or where an exhaustive search with the judge found one "
+           "(`paper/src/itensor_paper/data/known_places.csv`); a run with none known may "
+           "still hold a place every method and search missed.\n"),
+          places_markdown(rows),
           "", "## Scenes where the affordance accepted any prediction (any of its examples)\n",
           scenes_markdown(scenes), "",
           "## The judge on the labelled set\n", judge_markdown(res.judge_accuracy), "",

@@ -29,7 +29,13 @@ Protocol (after the paper's human-marker protocol, section 4.2):
   top predictions**: of the top poses the method itself accepted, the share valid (what a
   user is told; a scene with nothing to accept adds none, so this is not the paper's
   measure, but the one the project's targets are set on, with place recall and false
-  acceptance; its average row pools the affordances' accepted top poses). The average row
+  acceptance; its average row pools the affordances' accepted top poses). **Place recall**:
+  of the (scene, example) runs where a valid place is known, the share whose accepted top
+  poses hold a valid one; **false acceptance**: of the runs where none is known, the share
+  that accept anything (the right answer there is "no place here"). A place is known where
+  any method's judged pose (top or bottom) in that run is valid, or where an exhaustive
+  search with the judge found one (:data:`KNOWN_PLACES`, :mod:`.oracle`); a run with no place
+  known may still hold one that every method and search missed. The average row
   is otherwise the mean over the five affordances (as the paper's Table 1). The paper's own
   numbers fit F = 2 P / (1 + P) in every row, i.e. its "accuracy" is the precision of the
   top predictions with every bottom prediction counted as a true negative: our precision
@@ -41,6 +47,7 @@ Protocol (after the paper's human-marker protocol, section 4.2):
 
 from __future__ import annotations
 
+import csv
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -306,12 +313,33 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
     return res
 
 
-def metrics(judgements, methods=METHODS, runs=()) -> list[dict]:
+#: (scene, example) runs in which an exhaustive search with the judge found a valid place
+#: that no method's judged pose shows (``scripts/filling_oracle.py``, ``region_oracle.py``).
+KNOWN_PLACES = Path(__file__).resolve().parent / "data" / "known_places.csv"
+
+
+def known_places(path=KNOWN_PLACES) -> set:
+    """{(scene, example)} of :data:`KNOWN_PLACES` (empty without the file)."""
+
+    path = Path(path)
+    if not path.exists():
+        return set()
+    with open(path, newline="") as fh:
+        return {(r["scene"], r["example"]) for r in csv.DictReader(fh)}
+
+
+def metrics(judgements, methods=METHODS, runs=(), known=None) -> list[dict]:
     """Table 1 rows: per affordance and method, accuracy, F-score and precision (%), the
-    (scene, example) runs with any accepted prediction (``with_accepted`` of ``runs``), and the
+    (scene, example) runs with any accepted prediction (``with_accepted`` of ``runs``), place
+    recall and false acceptance over ``runs`` (a place known in a run where any judged pose
+    of it is valid, or where ``known`` says so: default :func:`known_places`), and the
     average over affordances (module docstring)."""
     rows = []
     present = [a for a in AFFORDANCES if any(j["affordance"] == a for j in judgements)]
+    known = known_places() if known is None else set(known)
+    known |= {(j["scene"], j["example"]) for j in judgements if j["valid"]}
+    found = {(j["scene"], j["example"], j["method"]) for j in judgements
+             if j["group"] == "top" and j["accepted"] and j["valid"]}
     for m in methods:
         per = []
         for a in present:
@@ -329,11 +357,19 @@ def metrics(judgements, methods=METHODS, runs=()) -> list[dict]:
             said = [j for j in js if j["group"] == "top" and j["accepted"]]
             said_ok = sum(bool(j["valid"]) for j in said)
             rr = [r for r in runs if r["affordance"] == a and r["method"] == m]
+            with_place = [r for r in rr if (r["scene"], r["example"]) in known]
+            no_place = [r for r in rr if (r["scene"], r["example"]) not in known]
+            hit = sum((r["scene"], r["example"], m) in found for r in with_place)
+            false = sum(bool(r["any_accepted"]) for r in no_place)
             row = {"affordance": a, "method": m, "accuracy": acc, "f_score": f1,
                    "precision": prec, "tp": tp, "fp": fp, "tn": tn, "fn": fn,
                    "runs": len(rr), "with_accepted": sum(r["any_accepted"] for r in rr),
                    "accepted_top": len(said), "accepted_top_valid": said_ok,
-                   "accepted_precision": _share(said_ok, len(said))}
+                   "accepted_precision": _share(said_ok, len(said)),
+                   "runs_with_place": len(with_place), "runs_finding_place": hit,
+                   "place_recall": _share(hit, len(with_place)),
+                   "runs_without_place": len(no_place), "runs_accepting_falsely": false,
+                   "false_acceptance": _share(false, len(no_place))}
             per.append(row)
             rows.append(row)
         if per:
@@ -342,9 +378,15 @@ def metrics(judgements, methods=METHODS, runs=()) -> list[dict]:
                       for k in ("accuracy", "f_score", "precision")},
                    **{k: int(sum(r[k] for r in per))
                       for k in ("tp", "fp", "tn", "fn", "runs", "with_accepted",
-                                "accepted_top", "accepted_top_valid")}}
-            # the accepted top poses of all affordances together, as its count beside it
+                                "accepted_top", "accepted_top_valid", "runs_with_place",
+                                "runs_finding_place", "runs_without_place",
+                                "runs_accepting_falsely")}}
+            # the accepted top poses (and the runs) of all affordances together, as the
+            # counts beside them
             avg["accepted_precision"] = _share(avg["accepted_top_valid"], avg["accepted_top"])
+            avg["place_recall"] = _share(avg["runs_finding_place"], avg["runs_with_place"])
+            avg["false_acceptance"] = _share(avg["runs_accepting_falsely"],
+                                             avg["runs_without_place"])
             rows.append(avg)
     return rows
 

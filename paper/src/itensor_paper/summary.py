@@ -4,8 +4,11 @@ An evaluation (``itensor paper evaluate``, ``merge``, ``rejudge``) writes its wh
 a git-ignored folder; :func:`write_summary` copies the current figures out of it into the
 tracked ``paper/results/``, overwriting what was there: Table 1 (Markdown and CSV, written
 afresh from the run's verdicts by the current report), the judge's accuracy on its labelled
-poses and one picture per affordance (the run's close-up sheet of iT's example and scene
-whose top 5 the judge finds valid most often; ties by name).
+poses, one picture per affordance (the run's close-up sheet of iT's example and scene
+whose top 5 the judge finds valid most often; ties by name) and ``closeups.png``, the
+README's picture: from each of those sheets, the close-up of the best pose the tool reports
+(the first accepted; the first shown where none is), its affordance, example, scene and
+verdict under it.
 """
 
 from __future__ import annotations
@@ -29,26 +32,84 @@ ALSO = ("panel_agreement.csv",)
 METHOD = "iT-weighted"
 
 
-def chosen_pictures(run: Path) -> dict:
-    """{affordance: picture path} of a run: per affordance, the (example, scene) sheet of
-    :data:`METHOD` whose top poses the judge found valid most often, ties by example and
-    scene name; affordances without a picture are left out."""
+#: The order of the close-ups in ``closeups.png``.
+AFFORDANCES = ("placing", "sitting", "hanging", "filling", "riding")
+#: Close-ups per row of ``closeups.png``.
+COLUMNS = 3
+
+
+def _top_rows(run: Path) -> dict:
+    """{(affordance, example, scene): [judgement rows of :data:`METHOD`'s top poses, by
+    rank]} of a run."""
     path = run / "judgements.csv"
     if not path.exists():
         return {}
-    valid: dict = {}
+    rows: dict = {}
     with open(path, newline="") as fh:
         for row in csv.DictReader(fh):
-            if row["method"] != METHOD or row["group"] != "top":
-                continue
-            key = (row["affordance"], row["example"], row["scene"])
-            valid[key] = valid.get(key, 0) + (row["valid"] == "True")
+            if row["method"] == METHOD and row["group"] == "top":
+                rows.setdefault((row["affordance"], row["example"], row["scene"]),
+                                []).append(row)
+    for items in rows.values():
+        items.sort(key=lambda r: int(r["rank"]))
+    return rows
+
+
+def _chosen(run: Path) -> dict:
+    """{affordance: (picture path, its top rows)}: per affordance, the (example, scene)
+    sheet of :data:`METHOD` whose top poses the judge found valid most often, ties by
+    example and scene name; affordances without a picture are left out."""
     best: dict = {}
-    for (aff, example, scene), n in sorted(valid.items()):
+    for (aff, example, scene), rows in sorted(_top_rows(run).items()):
+        n = sum(r["valid"] == "True" for r in rows)
         picture = run / "pictures" / f"{example}__{scene}.png"
         if picture.exists() and (aff not in best or n > best[aff][0]):
-            best[aff] = (n, picture)
-    return {aff: picture for aff, (_, picture) in sorted(best.items())}
+            best[aff] = (n, picture, rows)
+    return {aff: (picture, rows) for aff, (_, picture, rows) in sorted(best.items())}
+
+
+def chosen_pictures(run: Path) -> dict:
+    """{affordance: picture path} of a run (:func:`_chosen`)."""
+    return {aff: picture for aff, (picture, _) in _chosen(run).items()}
+
+
+def closeups(run: Path, path: Path) -> Path | None:
+    """Write ``path``: one close-up per affordance, cut from its chosen sheet
+    (:func:`_chosen`, drawn by :func:`.pictures.run_sheet`): the first accepted pose's panel
+    (the first shown where none is accepted), with the affordance, example, scene, rank,
+    whether the tool reports it and the judge's verdict under it. None without pictures."""
+    from PIL import Image, ImageDraw
+
+    from interaction_tensor.outputs.render import _font
+    from itensor_paper.pictures import PANEL, TITLE
+
+    chosen = _chosen(run)
+    order = [a for a in AFFORDANCES if a in chosen] + sorted(set(chosen) - set(AFFORDANCES))
+    if not order:
+        return None
+    w, h = PANEL
+    cols = min(COLUMNS, len(order))
+    img = Image.new("RGB", (cols * w, -(-len(order) // cols) * (h + 36)), (255, 255, 255))
+    draw = ImageDraw.Draw(img)
+    for i, aff in enumerate(order):
+        picture, rows = chosen[aff]
+        cx, cy = (i % cols) * w, (i // cols) * (h + 36)
+        k = next((j for j, r in enumerate(rows) if r["accepted"] == "True"), 0)
+        sheet = Image.open(picture).convert("RGB")
+        x, y = (k % 5) * w, TITLE + (k // 5) * (h + 34)
+        img.paste(sheet.crop((x, y, x + w, y + h)), (cx, cy))
+        draw.rectangle([cx, cy, cx + w - 1, cy + h - 1], outline=(210, 210, 210))
+        r = rows[k]
+        said = "reported" if r["accepted"] == "True" else "not reported"
+        verdict = "valid" if r["valid"] == "True" else "invalid"
+        lines = (f"{aff}: {r['example']} in {r['scene']}",
+                 f"#{r['rank']} {said}, judged {verdict}")
+        for n, line in enumerate(lines):
+            draw.text((cx + 6, cy + h + 2 + 16 * n), line[:52], fill=(20, 20, 20),
+                      font=_font(12))
+    with open(path, "wb") as fh:
+        img.save(fh, format="PNG", optimize=True)
+    return path
 
 
 def write_summary(run, out) -> Path:
@@ -74,4 +135,5 @@ def write_summary(run, out) -> Path:
         (tmp / "pictures").mkdir()
         for aff, picture in chosen_pictures(run).items():
             shutil.copyfile(picture, tmp / "pictures" / f"{aff}.png")
+        closeups(run, tmp / "pictures" / "closeups.png")
     return out
