@@ -40,15 +40,19 @@ def test_metrics_definitions():
     assert r["accuracy"] == pytest.approx(70.0)
     assert r["f_score"] == pytest.approx(100 * 6 / 9)
     assert r["precision"] == pytest.approx(60.0)
+    # of the 4 valid places among top and bottom, 3 are in the top
+    assert r["forced_choice"] == pytest.approx(75.0)
     # of the 3 top poses it accepted, 2 are valid; the rejected fillers do not count
     assert (r["accepted_top"], r["accepted_top_valid"]) == (3, 2)
     assert r["accepted_precision"] == pytest.approx(100 * 2 / 3)
     sit = rows[1]
     assert sit["affordance"] == "sitting" and sit["accepted_top"] == 0
     assert np.isnan(sit["accepted_precision"]) and sit["precision"] == 0.0
+    assert np.isnan(sit["forced_choice"])                 # nothing valid to choose
     avg = rows[-1]
     assert avg["affordance"] == "average"
     assert avg["accuracy"] == pytest.approx((70.0 + 0.0) / 2)
+    assert avg["forced_choice"] == pytest.approx(75.0)    # over the affordances defining it
     # the average share pools the accepted top poses (sitting adds none)
     assert avg["accepted_precision"] == pytest.approx(100 * 2 / 3)
     assert (avg["accepted_top"], avg["accepted_top_valid"]) == (3, 2)

@@ -39,7 +39,10 @@ Protocol (after the paper's human-marker protocol, section 4.2):
   is otherwise the mean over the five affordances (as the paper's Table 1). The paper's own
   numbers fit F = 2 P / (1 + P) in every row, i.e. its "accuracy" is the precision of the
   top predictions with every bottom prediction counted as a true negative: our precision
-  column is the comparable number.
+  column is the comparable number. Its raters chose the right places among the top 5 and
+  bottom 5 shown together; **forced choice** is the share of the places the judge would
+  choose there that come from the top 5, TP / (TP + FN) (undefined where it chooses none;
+  the average row is the mean over the affordances where it is defined).
 * Sampling experiment (paper, Fig. 8): for the pairs the score accepted with the
   weight-driven and the uniform keypoint sets, the keypoint comparisons needed to reach the
   acceptance threshold (``decided_at``), mean over all of them and over the top 20 % by score.
@@ -352,6 +355,7 @@ def metrics(judgements, methods=METHODS, runs=(), known=None) -> list[dict]:
             acc = 100.0 * (tp + tn) / n if n else float("nan")
             f1 = 100.0 * 2 * tp / (2 * tp + fp + fn) if (2 * tp + fp + fn) else 0.0
             prec = 100.0 * tp / (tp + fp) if (tp + fp) else 0.0
+            choice = _share(tp, tp + fn)
             # the top poses the method itself accepted (the others fill a top 5 that has
             # fewer accepted ones): what a user is told, and how often it holds
             said = [j for j in js if j["group"] == "top" and j["accepted"]]
@@ -362,7 +366,8 @@ def metrics(judgements, methods=METHODS, runs=(), known=None) -> list[dict]:
             hit = sum((r["scene"], r["example"], m) in found for r in with_place)
             false = sum(bool(r["any_accepted"]) for r in no_place)
             row = {"affordance": a, "method": m, "accuracy": acc, "f_score": f1,
-                   "precision": prec, "tp": tp, "fp": fp, "tn": tn, "fn": fn,
+                   "precision": prec, "forced_choice": choice,
+                   "tp": tp, "fp": fp, "tn": tn, "fn": fn,
                    "runs": len(rr), "with_accepted": sum(r["any_accepted"] for r in rr),
                    "accepted_top": len(said), "accepted_top_valid": said_ok,
                    "accepted_precision": _share(said_ok, len(said)),
@@ -381,6 +386,8 @@ def metrics(judgements, methods=METHODS, runs=(), known=None) -> list[dict]:
                                 "accepted_top", "accepted_top_valid", "runs_with_place",
                                 "runs_finding_place", "runs_without_place",
                                 "runs_accepting_falsely")}}
+            chosen = [r["forced_choice"] for r in per if not np.isnan(r["forced_choice"])]
+            avg["forced_choice"] = float(np.mean(chosen)) if chosen else float("nan")
             # the accepted top poses (and the runs) of all affordances together, as the
             # counts beside them
             avg["accepted_precision"] = _share(avg["accepted_top_valid"], avg["accepted_top"])
