@@ -61,6 +61,18 @@ def test_metrics_definitions():
     assert rows[-1]["accepted_precision"] == pytest.approx(75.0)
 
 
+def test_known_places_are_the_searches_that_found_one(tmp_path):
+    path = tmp_path / "known.csv"
+    path.write_text("scene,example,valid_places,search\n"
+                    "k1,filling-mug,2,filling_oracle.py\n"
+                    "l2,riding-human,0,region_oracle.py\n")
+    assert runner.known_places(path) == {("k1", "filling-mug")}
+    assert runner.known_places(tmp_path / "none.csv") == set()
+    shipped = runner.known_places()
+    assert ("kitchen1", "filling-mug") in shipped
+    assert ("living-room2", "riding-human") not in shipped
+
+
 def test_place_recall_and_false_acceptance():
     def j(scene, m, group, valid, accepted):
         return {"affordance": "sitting", "method": m, "group": group, "valid": valid,

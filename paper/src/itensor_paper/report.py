@@ -254,8 +254,9 @@ def write_all(res, out: Path) -> None:
            "those whose accepted top poses hold one; false acceptance: of the runs where none "
            "is known, those that accept anything. A place is known where any method's judged "
            "pose in the run is valid, or where an exhaustive search with the judge found one "
-           "(`paper/src/itensor_paper/data/known_places.csv`); a run with none known may "
-           "still hold a place every method and search missed.\n"),
+           "(`paper/src/itensor_paper/data/known_places.csv` lists the runs searched and "
+           "what each search found); a run with none known may still hold a place every "
+           "method and search missed.\n"),
           places_markdown(rows),
           "", "## Scenes where the affordance accepted any prediction (any of its examples)\n",
           scenes_markdown(scenes), "",

@@ -316,19 +316,22 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
     return res
 
 
-#: (scene, example) runs in which an exhaustive search with the judge found a valid place
-#: that no method's judged pose shows (``scripts/filling_oracle.py``, ``region_oracle.py``).
+#: (scene, example) runs searched exhaustively with the judge (``scripts/filling_oracle.py``,
+#: ``region_oracle.py``) and how many valid places the search found (0: none in the family
+#: it searched).
 KNOWN_PLACES = Path(__file__).resolve().parent / "data" / "known_places.csv"
 
 
 def known_places(path=KNOWN_PLACES) -> set:
-    """{(scene, example)} of :data:`KNOWN_PLACES` (empty without the file)."""
+    """{(scene, example)} of the runs in which :data:`KNOWN_PLACES` found a valid place
+    (empty without the file)."""
 
     path = Path(path)
     if not path.exists():
         return set()
     with open(path, newline="") as fh:
-        return {(r["scene"], r["example"]) for r in csv.DictReader(fh)}
+        return {(r["scene"], r["example"]) for r in csv.DictReader(fh)
+                if int(r["valid_places"]) > 0}
 
 
 def metrics(judgements, methods=METHODS, runs=(), known=None) -> list[dict]:
