@@ -172,7 +172,7 @@ def test_evaluate_smoke_on_two_scenes(tmp_path):
     sheet = np.asarray(Image.open(summary / "pictures" / "placing.png").convert("RGB"))
     strip = np.asarray(Image.open(summary / "pictures" / "closeups.png").convert("RGB"))
     w, h = PANEL                       # the close-up: the chosen sheet's panel of its first
-    x, y = first * w, TITLE            # accepted pose
+    x, y = first * w, TITLE            # accepted pose (one row of 5)
     assert np.array_equal(strip[:h, :w], sheet[y:y + h, x:x + w])
     assert main(["paper", "summary", str(tmp_path / "nothing"), "-o", str(summary)]) == 2
     assert (summary / "table1.md").exists()

@@ -29,6 +29,15 @@ SCENE = (150, 150, 160)
 PANEL = (360, 300)
 #: Height (px) of a sheet's title, above its first row of panels.
 TITLE = 30
+#: Height (px) of the caption under each panel, and panels per row of a sheet.
+CAPTION = 34
+PER_ROW = 5
+
+
+def panel_origin(i: int, count: int) -> tuple:
+    """(x, y) of the top left of panel ``i`` of a :func:`sheet` of ``count`` panels."""
+    cols = min(PER_ROW, count)
+    return (i % cols) * PANEL[0], TITLE + (i // cols) * (PANEL[1] + CAPTION)
 
 
 def _samples(geometry, spacing: float, seed: int = 0, limit: int = 2_500_000):
@@ -141,14 +150,14 @@ def sheet(path, scene_geometry, query_geometry, poses, valid, captions, title: s
     if not panels:
         panels = [np.full((PANEL[1], PANEL[0], 3), 255, np.uint8)]
         captions = ["no prediction"]
-    cols = min(5, len(panels))
+    cols = min(PER_ROW, len(panels))
     rows = (len(panels) + cols - 1) // cols
     w, h = PANEL
-    img = Image.new("RGB", (cols * w, TITLE + rows * (h + 34)), (255, 255, 255))
+    img = Image.new("RGB", (cols * w, TITLE + rows * (h + CAPTION)), (255, 255, 255))
     draw = ImageDraw.Draw(img)
     draw.text((8, 7), title, fill=(20, 20, 20), font=_font(16))
     for i, (panel, cap) in enumerate(zip(panels, captions)):
-        x, y = (i % cols) * w, TITLE + (i // cols) * (h + 34)
+        x, y = panel_origin(i, len(panels))
         img.paste(Image.fromarray(panel), (x, y))
         draw.rectangle([x, y, x + w - 1, y + h - 1], outline=(210, 210, 210))
         for k, line in enumerate(str(cap).split("\n")[:2]):

@@ -19,6 +19,7 @@ from pathlib import Path
 
 from interaction_tensor.errors import InputError
 from interaction_tensor.geometry.files import atomic_dir
+from itensor_paper.common import AFFORDANCES
 from itensor_paper.merge import load_run
 from itensor_paper.report import write_all
 from itensor_paper.runner import METHODS, metrics
@@ -32,8 +33,6 @@ ALSO = ("panel_agreement.csv",)
 METHOD = "iT-weighted"
 
 
-#: The order of the close-ups in ``closeups.png``.
-AFFORDANCES = ("placing", "sitting", "hanging", "filling", "riding")
 #: Close-ups per row of ``closeups.png``.
 COLUMNS = 3
 
@@ -81,7 +80,7 @@ def closeups(run: Path, path: Path) -> Path | None:
     from PIL import Image, ImageDraw
 
     from interaction_tensor.outputs.render import _font
-    from itensor_paper.pictures import PANEL, TITLE
+    from itensor_paper.pictures import CAPTION, PANEL, panel_origin
 
     chosen = _chosen(run)
     order = [a for a in AFFORDANCES if a in chosen] + sorted(set(chosen) - set(AFFORDANCES))
@@ -89,14 +88,15 @@ def closeups(run: Path, path: Path) -> Path | None:
         return None
     w, h = PANEL
     cols = min(COLUMNS, len(order))
-    img = Image.new("RGB", (cols * w, -(-len(order) // cols) * (h + 36)), (255, 255, 255))
+    img = Image.new("RGB", (cols * w, -(-len(order) // cols) * (h + CAPTION)),
+                    (255, 255, 255))
     draw = ImageDraw.Draw(img)
     for i, aff in enumerate(order):
         picture, rows = chosen[aff]
-        cx, cy = (i % cols) * w, (i // cols) * (h + 36)
+        cx, cy = (i % cols) * w, (i // cols) * (h + CAPTION)
         k = next((j for j, r in enumerate(rows) if r["accepted"] == "True"), 0)
         sheet = Image.open(picture).convert("RGB")
-        x, y = (k % 5) * w, TITLE + (k // 5) * (h + 34)
+        x, y = panel_origin(k, len(rows))
         img.paste(sheet.crop((x, y, x + w, y + h)), (cx, cy))
         draw.rectangle([cx, cy, cx + w - 1, cy + h - 1], outline=(210, 210, 210))
         r = rows[k]
