@@ -101,3 +101,94 @@ def test_the_cli_skips_the_test():
     args = build_parser().parse_args(["detect", "s.ply", "d.npz", "-o", "out",
                                       "--skip-test", "fills"])
     assert not _detect_settings(args).runs("fills")
+
+
+def test_the_tap_test_of_every_pair_matches_its_reference(filling, kitchen):
+    """The Numba kernel that asks every pair for a tap gives the reference's answers."""
+    _, tensor = filling
+    ox, oy, oz = shapes.TAP_OUTLET
+    rng = np.random.default_rng(3)
+    openings = np.vstack([
+        kitchen.points[rng.choice(len(kitchen), 3000, replace=False)] - [0, 0, 0.1],
+        np.c_[ox + rng.uniform(-0.05, 0.05, (300, 2)) * [1, 1], np.full(300, oz)]
+        - [0, 0, rng.uniform(0.02, 0.3)],
+        [[2.0, 0.0, 0.75]]])                                   # under the shelf
+    fast = taps.taps_above(openings, kitchen.points, kitchen.tree, kitchen.grid())
+    slow = taps.taps_above(openings, kitchen.points, kitchen.tree)
+    np.testing.assert_array_equal(fast, slow)
+    assert 50 < fast.sum() < len(openings) - 2000 and not fast[-1]
+
+
+def test_every_pair_is_asked_for_a_tap_before_its_score(filling, kitchen):
+    _, tensor = filling
+    det = it.detect(kitchen, tensor, it.DetectSettings(top_k=5))
+    st = det.stats
+    assert st["pairs_failing_tap"] > 0.9 * st["pairs"]
+    assert st["pairs_scored"] < 0.05 * st["pairs"]
+    off = it.detect(kitchen, tensor, it.DetectSettings(top_k=5, skip_tests=("fills",)))
+    assert off.stats["pairs_failing_tap"] == 0
+
+
+def test_a_container_stands_on_what_is_under_it(filling):
+    ex, tensor = filling
+    v = tensor.vessel()
+    sink = it.prepare_scene(ex.scene_object, 0.01, seed=0)
+    rot = np.eye(3)
+    # the example's pose stands where it is; 6 cm higher it comes down to the basin
+    assert taps.settle(v, rot, np.zeros(3), sink.points, sink.tree) == pytest.approx(0, abs=0.006)
+    assert taps.settle(v, rot, [0, 0, 0.06], sink.points, sink.tree) == pytest.approx(-0.06, abs=0.006)
+    # sunk 5 mm into the bottom it comes up; past its drop over the basin, it would fall
+    assert taps.settle(v, rot, [0, 0, -0.005], sink.points, sink.tree) == pytest.approx(0.005, abs=0.006)
+    high = [-0.15, -0.08, taps.SETTLE_DROP + 0.03]              # over the basin, off the tap
+    assert np.isnan(taps.settle(v, rot, high, sink.points, sink.tree))
+    # beyond the counter, nothing under it
+    assert np.isnan(taps.settle(v, rot, [2.0, 0, 0], sink.points, sink.tree))
+    # it stands on the basin's bottom, not half over the counter's edge
+    assert taps.stands(v, rot, np.zeros(3), sink.points, sink.tree)
+    edge = np.array([0.5 - v.com[0], 0, 0.9 - v.support])       # centre over the right edge
+    assert abs(taps.support_margin(v, rot, edge, sink.points, sink.tree)) < 0.005
+    assert not taps.stands(v, rot, edge, sink.points, sink.tree)
+    past = edge + [0.02, 0, 0]
+    assert taps.support_margin(v, rot, past, sink.points, sink.tree) == pytest.approx(-0.02, abs=0.005)
+    inside = edge - [0.06, 0, 0]
+    assert taps.stands(v, rot, inside, sink.points, sink.tree)
+
+
+def test_a_mug_under_a_higher_tap_is_stood_in_the_basin(filling):
+    """A basin 8 cm deeper than the example's: the tap is 27 cm above its bottom. The
+    prediction stands the mug on the bottom instead of leaving it 8 cm in the air."""
+    ex, tensor = filling
+    sink = ex.scene_object
+    v = sink.vertices.copy()
+    low = v[:, 2] <= shapes.SINK_BOTTOM + 1e-6
+    v[low, 2] -= 0.08
+    deep = it.prepare_scene(it.Geometry(v, sink.faces), 0.01, seed=0)
+    det = it.detect(deep, tensor, it.DetectSettings(top_k=3, sample_fraction=1.0))
+    assert det.predictions
+    best = det.predictions[0]
+    base = best.pose[2, 3] + tensor.vessel().support
+    assert base == pytest.approx(shapes.SINK_BOTTOM - 0.08, abs=0.01)
+    i = int(np.flatnonzero((det.pair_point == best.point_index)
+                           & (det.pair_orientation == best.orientation_index))[0])
+    assert det.lift(i) == pytest.approx(-0.08, abs=0.012)
+    rot, t = best.pose[:3, :3], best.pose[:3, 3]
+    assert taps.fills(tensor.vessel(), rot, t, deep.points, deep.normals, deep.tree,
+                      deep.spacing)
+
+
+def test_the_descriptor_carries_its_normal_tolerance(filling, tmp_path):
+    _, tensor = filling
+    assert tensor.normal_tolerance == affordances.acceptance("filling")["normal_tolerance"]
+    path = tmp_path / "filling.npz"
+    tensor.save(path)
+    back = it.load_tensor(path)
+    assert back.normal_tolerance == tensor.normal_tolerance
+    assert it.DetectSettings().normal_tolerance(back) == tensor.normal_tolerance
+    assert it.DetectSettings(normal_tolerance_deg=10).normal_tolerance(back) == 10
+    plain = affordances.build_descriptor("placing-bowl")
+    assert plain.normal_tolerance is None
+    assert it.DetectSettings().normal_tolerance(plain) == 15.0
+    with pytest.raises(ValueError, match="normal_tolerance"):
+        back.set_acceptance(0.5, normal_tolerance=120)
+    back.set_acceptance(0.5, normal_tolerance="off")
+    assert back.normal_tolerance is None

@@ -20,6 +20,9 @@ BACKENDS = ("auto", "numba", "numpy", "torch")
 #: The placement tests, in the order detection runs them (``DetectSettings.skip_tests``).
 PLACEMENT_TESTS = ("clearance", "contact", "interior", "ground", "feet", "straddle", "mount",
                    "through", "collision", "hangs", "fills")
+#: The normal filter's tolerance (degrees) where neither the settings nor the descriptor
+#: give one (``DetectSettings.normal_tolerance_deg``).
+NORMAL_TOLERANCE_DEG = 15.0
 #: Smallest sampling spacing (m): finer sampling grows memory as 1 / spacing^2 (a 1e-6 m
 #: spacing asked for gigabytes before any check), and no scan resolves below a millimetre.
 MIN_SPACING = 1e-3
@@ -164,8 +167,10 @@ class DetectSettings:
     n_orientations: int = 8
     #: Largest angle (degrees) between a test point's normal line and N_aff. Normals of CAD
     #: scenes and scans are not consistently oriented, so the sign is ignored unless
-    #: ``oriented_normals`` (ours; the paper only says n_i ~ N_aff).
-    normal_tolerance_deg: float = 15.0
+    #: ``oriented_normals`` (ours; the paper only says n_i ~ N_aff). None: the
+    #: descriptor's own (``InteractionTensor.normal_tolerance``), else
+    #: :data:`NORMAL_TOLERANCE_DEG` (:meth:`normal_tolerance`).
+    normal_tolerance_deg: float | None = None
     oriented_normals: bool = False
     #: ``paper``: eq. 5 angle and magnitude tests; ``gaussian``: the authors' code criterion.
     #: None: by the kind of scene, ``gaussian`` for captured data (RGB-D frames and scans,
@@ -207,7 +212,8 @@ class DetectSettings:
         _check(0 < self.sample_fraction <= 1, "sample_fraction must be in (0, 1]")
         _check(isinstance(self.n_orientations, numbers.Integral)
                and 1 <= self.n_orientations <= 360, "n_orientations must be in [1, 360]")
-        _check(0 <= self.normal_tolerance_deg <= 180, "normal_tolerance_deg must be in [0, 180]")
+        _check(self.normal_tolerance_deg is None or 0 <= self.normal_tolerance_deg <= 180,
+               "normal_tolerance_deg must be in [0, 180]")
         _check(self.criterion is None or self.criterion in CRITERIA,
                f"criterion must be one of {CRITERIA} (or None: by the kind of scene)")
         _check(self.keypoints in KEYPOINT_SETS, f"keypoints must be one of {KEYPOINT_SETS}")
@@ -245,6 +251,14 @@ class DetectSettings:
         d = {f.name: getattr(self, f.name) for f in fields(self)}
         d["skip_tests"] = list(self.skip_tests)
         return d
+
+    def normal_tolerance(self, tensor) -> float:
+        """The normal filter's tolerance (degrees) for ``tensor``: these settings', else the
+        descriptor's, else :data:`NORMAL_TOLERANCE_DEG`."""
+        if self.normal_tolerance_deg is not None:
+            return float(self.normal_tolerance_deg)
+        own = getattr(tensor, "normal_tolerance", None)
+        return NORMAL_TOLERANCE_DEG if own is None else float(own)
 
     def for_scene(self, scene) -> "DetectSettings":
         """These settings with the defaults that depend on the scene filled in: the criterion

@@ -223,8 +223,10 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                         sample_fraction=frac, keypoints=kp, seed=st.seed), engine=Engine(
                         # every pair scored first, the accepted ones in full: the sampling
                         # record ranks them by full score, and rank_pairs starts from every
-                        # pair's partial score
-                        score_first=True, rank=False,
+                        # pair's partial score. A container's tap test comes first: it
+                        # leaves a few hundred of a scene's pairs, and the score, whose
+                        # threshold accepts nearly every pair, would be taken in full of all
+                        score_first=not tensor.fills, rank=False,
                         # the exact neighbour cache, kept on the scene's grid for every
                         # example of the scene: at 30 % test points it pays for persons as
                         # well
@@ -273,8 +275,7 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                 shown = []
                 for group, idxs in (("top", top), ("bottom", bottom)):
                     for rank, i in enumerate(idxs, 1):
-                        pose = poses[i] if poses is not None else tensor.pose(
-                            scene.points[point[i]], 2 * np.pi * orient[i] / 8)
+                        pose = poses[i] if poses is not None else det.pair_pose(int(i))
                         v = judge.judge(jscene, pose)
                         res.judgements.append({
                             "scene": f.stem, "example": n, "affordance": aff, "method": m,

@@ -300,9 +300,7 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
                                  rng)
             check = collision_check(det)
             for i, w in zip(pick, frac):
-                pose = tensor.pose(scene.points[det.pair_point[i]],
-                                   2 * np.pi * det.pair_orientation[i] / det.settings.n_orientations)
-                v = judge.judge(jscene, pose)
+                v = judge.judge(jscene, det.pair_pose(int(i)))
                 res.rows.append({
                     "scene": sname, "example": n, "affordance": aff, "pair": int(i),
                     "near_site": bool(is_near[i]),
@@ -414,8 +412,9 @@ class _TopJudge:
             if run.scene not in self.scenes:
                 self.scenes[run.scene] = JudgeScene(validation.build_scene(run.scene).geometry)
             _, _, judge = self.models[run.example]
-            v = judge.judge(self.scenes[run.scene],
-                            run.tensor.pose(run.position[i], 2 * np.pi * run.orient[i] / 8))
+            pose = (run.check.det.pair_pose(int(i)) if run.check is not None
+                    else run.tensor.pose(run.position[i], 2 * np.pi * run.orient[i] / 8))
+            v = judge.judge(self.scenes[run.scene], pose)
             self.cache[key] = (bool(v.valid), "; ".join(v.reasons))
         return self.cache[key]
 

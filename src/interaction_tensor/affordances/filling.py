@@ -39,10 +39,11 @@ AFFORDANCE = Affordance(
     # S_aff and the clearance limit of largest F1 against the judge on the validation rooms'
     # pairs; the collision and through tests chosen on the labelled set; the filling tests
     # (a tap above, a basin round it, a sink under it) the judge's.
-    acceptance=dict(threshold=0.575, gaussian_threshold=0.675,
+    acceptance=dict(threshold=0.02, gaussian_threshold=0.675,
                     clearance_limit=0.02, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),
-                    collision=[(0.01, None)], through=True, fills=True),
+                    collision=[(0.01, None)], through=False, fills=True,
+                    normal_tolerance=30.0),
     judge=JudgeRule(("upright", "penetration", "contact", "support", "overhead", "basin",
                      "sink"), hull=True),
     reference_at_support=False,

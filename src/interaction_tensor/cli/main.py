@@ -80,7 +80,8 @@ def detection_options(p) -> None:
                    help="orientations of the query object about +Z (the paper's 8)")
     p.add_argument("--normal-tolerance", type=number(low=0, high=180),
                    default=d.normal_tolerance_deg,
-                   help="largest angle in degrees between a test normal and N_aff")
+                   help="largest angle in degrees between a test normal and N_aff "
+                        "(default: the descriptor's, else 15)")
     p.add_argument("--oriented-normals", action="store_true",
                    help="trust the sign of scene normals (default: compare the normal line)")
     p.add_argument("--skip-test", action="append", default=[], metavar="TEST",
@@ -237,7 +238,7 @@ def _report(args, result, outdir) -> None:
                f"{st['candidates_after_normal_filter']} after the normal filter")
     if st["candidates_after_normal_filter"] == 0:
         _say(args, "no candidate: no test point's normal lies within --normal-tolerance "
-                   f"({result.settings.normal_tolerance_deg:g} deg) of the descriptor's "
+                   f"({result.settings.normal_tolerance(result.tensor):g} deg) of the descriptor's "
                    "affordance normal, so nothing was scored")
     rate = st.get("candidates_per_second")
     tests_s = st["seconds"].get("placement_tests", 0)
@@ -250,7 +251,7 @@ def _report(args, result, outdir) -> None:
                f"scored pair's decision")
     of_what = f"{st['pairs_scored']} that passed the placement tests"
     _say(args, f"accepted {st['pairs_accepted']} of the {of_what} (placement tests failed: "
-               f"clearance "
+               f"tap {st['pairs_failing_tap']}, clearance "
                f"{st['pairs_failing_clearance']}, contact {st['pairs_failing_contact']}, "
                f"interior {st['pairs_failing_interior']}, ground "
                f"{st['pairs_failing_ground']}, feet {st['pairs_failing_feet']}, straddle "
@@ -304,7 +305,8 @@ def summary(result, outdir) -> dict:
             "pairs_accepted": st["pairs_accepted"],
             "pairs_accepted_by_score": st["pairs_accepted_by_score"],
             "places": st.get("places", 0),
-            **{k: st[k] for k in ("pairs_failing_clearance", "pairs_failing_contact",
+            **{k: st[k] for k in ("pairs_failing_tap", "pairs_failing_clearance",
+                                  "pairs_failing_contact",
                                   "pairs_failing_interior", "pairs_failing_ground", "pairs_failing_feet",
                                   "pairs_failing_straddle", "pairs_failing_mount",
                                   "pairs_failing_through", "collision_test", "collision_tests",

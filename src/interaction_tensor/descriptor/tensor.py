@@ -255,6 +255,9 @@ class InteractionTensor:
     mount_height : detection rejects a placement whose reference point (a rider's seat) is
         more than this (m) above the scene's ground (the lowest scene sample within 1.5 m):
         no one climbs astride the top of a 2.4 m wall; None: no such test
+    normal_tolerance : how far (degrees) a test point's normal may lie from N_aff, unless
+        detection's settings give one (``DetectSettings.normal_tolerance_deg``): a tap's
+        spout turns its underside 25 degrees off straight down; None: the settings' default
     scene_points : (S, 3) scene-object samples used for the Voronoi step (subsampled)
     scene_spacing : spacing (m) of the scene-object samples; detection samples at it
     vectors : ``surface`` or ``points``, how provenance (and test) vectors are measured
@@ -302,6 +305,7 @@ class InteractionTensor:
     feet_reach: float | None = None
     straddle: dict | None = None
     mount_height: float | None = None
+    normal_tolerance: float | None = None
     thresholds: dict = field(default_factory=dict)
     self_scores: dict = field(default_factory=dict)
     meta: dict = field(default_factory=dict)
@@ -335,6 +339,7 @@ class InteractionTensor:
                        feet_reach: float | str | None = None,
                        straddle: dict | str | None = None,
                        mount_height: float | str | None = None,
+                       normal_tolerance: float | str | None = None,
                        gaussian_threshold: float | None = None) -> None:
         """Accept placements scoring at least ``threshold`` (both keypoint sets, paper
         criterion), violating at most ``clearance_limit`` of the clearance points and
@@ -350,7 +355,9 @@ class InteractionTensor:
         ``below_ground`` (m) sets the ground test (:attr:`below_ground`) and ``feet_reach``
         (m) the feet test (:attr:`feet_reach`), ``straddle`` (a dict of boxes) the straddle
         test (:attr:`straddle`) and ``mount_height`` (m) the mount test
-        (:attr:`mount_height`), ``"off"`` removes any of them. ``gaussian_threshold`` sets the
+        (:attr:`mount_height`), ``"off"`` removes any of them. ``normal_tolerance`` (degrees)
+        sets the normal filter's tolerance detection uses unless its settings give one
+        (:attr:`normal_tolerance`; ``"off"``: the settings' default). ``gaussian_threshold`` sets the
         threshold of the gaussian criterion (both keypoint sets; the default of captured
         scenes; 0.5, the authors' code's, until set). Arguments left None keep their
         value."""
@@ -374,6 +381,10 @@ class InteractionTensor:
             if value is not None and not (isinstance(value, str) and value == "off"):
                 if isinstance(value, (str, bool)) or not 0 <= float(value) <= top:
                     raise ValueError(f"{name} must be a height in [0, {top:g}] m or 'off'")
+        if normal_tolerance is not None and not (isinstance(normal_tolerance, str)
+                                                 and normal_tolerance == "off"):
+            if isinstance(normal_tolerance, (str, bool)) or not 0 <= float(normal_tolerance) <= 90:
+                raise ValueError("normal_tolerance must be an angle in [0, 90] degrees or 'off'")
         boxes = None
         if straddle is not None and not (isinstance(straddle, str) and straddle == "off"):
             boxes = straddle_boxes(straddle)
@@ -410,6 +421,9 @@ class InteractionTensor:
         if mount_height is not None:
             self.mount_height = (None if isinstance(mount_height, str)
                                  else float(mount_height))
+        if normal_tolerance is not None:
+            self.normal_tolerance = (None if isinstance(normal_tolerance, str)
+                                     else float(normal_tolerance))
         for cache in self._FCL_CACHES:
             self.__dict__.pop(cache, None)
 
@@ -512,7 +526,7 @@ class InteractionTensor:
                 "through": self.through, "hangs": self.hangs, "fills": self.fills,
                 "below_ground": self.below_ground,
                 "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle),
-                "mount_height": self.mount_height}
+                "mount_height": self.mount_height, "normal_tolerance": self.normal_tolerance}
 
     def pose(self, position, angle: float) -> np.ndarray:
         """4x4 pose taking the training-frame query object to ``position`` at ``angle``."""
@@ -743,7 +757,7 @@ class InteractionTensor:
             "hangs": self.hangs, "fills": self.fills,
             "ground": self.ground, "below_ground": self.below_ground,
             "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle),
-            "mount_height": self.mount_height,
+            "mount_height": self.mount_height, "normal_tolerance": self.normal_tolerance,
             "thresholds": self.thresholds, "self_scores": self.self_scores, "meta": self.meta,
         }
         arrays = {
@@ -838,6 +852,7 @@ class InteractionTensor:
             ground=header["ground"], below_ground=header["below_ground"],
             feet_reach=header["feet_reach"], straddle=header["straddle"],
             mount_height=header["mount_height"],
+            normal_tolerance=header["normal_tolerance"],
             thresholds=header["thresholds"],
             self_scores=header["self_scores"], meta=header["meta"])
         return tensor
@@ -886,7 +901,7 @@ class InteractionTensor:
             "hangs": self.hangs, "fills": self.fills,
             "ground": self.ground, "below_ground": self.below_ground,
             "feet_reach": self.feet_reach, "straddle": _boxes_json(self.straddle),
-            "mount_height": self.mount_height,
+            "mount_height": self.mount_height, "normal_tolerance_deg": self.normal_tolerance,
             "thresholds": self.thresholds, "self_scores": self.self_scores,
             "meta": self.meta,
         }
@@ -1027,6 +1042,9 @@ def validate_descriptor(path, header: dict, arrays: dict):
     mount = header.get("mount_height")
     if mount is not None:
         mount = number("mount_height", 0.0, 10.0)
+    tolerance = header.get("normal_tolerance")
+    if tolerance is not None:
+        tolerance = number("normal_tolerance", 0.0, 90.0)
     straddle = header.get("straddle")
     if straddle is not None:
         try:
@@ -1095,7 +1113,7 @@ def validate_descriptor(path, header: dict, arrays: dict):
               "ground": None if ground is None else float(ground),
               "below_ground": None if below is None else float(below),
               "feet_reach": None if feet is None else float(feet), "straddle": straddle,
-              "mount_height": mount,
+              "mount_height": mount, "normal_tolerance": tolerance,
               "meta": meta}
     return header, out
 

@@ -26,7 +26,8 @@ class Prediction:
     orientation_index : i, the query object turned by i * 2 pi / n about +Z
     angle : radians
     score : normalised score in [0, 1]
-    pose : (4, 4) rigid transform of the training-frame query object into the scene
+    pose : (4, 4) rigid transform of the training-frame query object into the scene (a
+        container stood on the surface under it: :meth:`.Detection.pair_pose`)
     point_index : index of the test point in the scene's points
     place : index of the :class:`Place` it lies in (-1: none given)
     """

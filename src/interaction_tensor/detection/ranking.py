@@ -27,7 +27,7 @@ class CollisionCheck:
     """Detection's exact tests of ranked pairs: collision, hanging and filling (those
     ``DetectSettings.skip_tests`` leaves of ``collision``, ``hangs`` and ``fills``).
 
-    A pair is posed (the descriptor's :meth:`~.InteractionTensor.pose`) and tested against
+    A pair is posed (:meth:`.Detection.pair_pose`) and tested against
     the scene's mesh with python-fcl. It passes when, for each of the descriptor's
     :attr:`~.InteractionTensor.collision_tests`, its tested query triangles do not cross the
     scene's or a move of that test's depth in one of 26 directions frees them
@@ -37,8 +37,9 @@ class CollisionCheck:
     the query to hang (:attr:`~.InteractionTensor.hangs`; on any scene, triangles or not),
     what crosses its opening must fit inside it and its bottom must hang free
     (:mod:`~interaction_tensor.placement.hooks`); where it asks the query to be filled
-    (:attr:`~.InteractionTensor.fills`), a tap, a basin and a sink must be there
-    (:mod:`~interaction_tensor.placement.taps`). Each pair is tested at most once
+    (:attr:`~.InteractionTensor.fills`), it is stood on the surface under it
+    (:meth:`.Detection.lift`; with nothing there it fails) and a tap, a basin and a sink must
+    be there (:mod:`~interaction_tensor.placement.taps`). Each pair is tested at most once
     (``state``: -1 untested, 0 passes, 1 fails); a pair that fails loses its acceptance
     (``placement`` :data:`~interaction_tensor.placement.checks.FAILS_COLLISION`). At most
     ``Engine.collision_max_tests`` pairs are tested; :meth:`free` answers None once they
@@ -92,8 +93,7 @@ class CollisionCheck:
             return None
         t = time.perf_counter()
         tensor = det.tensor
-        pose = tensor.pose(det.scene.points[det.pair_point[i]],
-                           2 * np.pi * int(det.pair_orientation[i]) / det.settings.n_orientations)
+        pose = det.pair_pose(i)           # a container stood on what is under it
         # cheapest and most rejecting first: through, hanging, filling, then penetration
         ok = True
         collider = det.scene.collider() if self.collides else None
@@ -107,8 +107,9 @@ class CollisionCheck:
                 self.failed_hanging += 1
         if ok and self.fill == "on":
             scene = det.scene
-            ok = taps.fills(tensor.vessel(), pose[:3, :3], pose[:3, 3], scene.points,
-                            scene.normals, scene.tree, scene.spacing)
+            ok = bool(np.isfinite(det.lift(i))) and taps.fills(
+                tensor.vessel(), pose[:3, :3], pose[:3, 3], scene.points, scene.normals,
+                scene.tree, scene.spacing)
             if not ok:
                 self.failed_filling += 1
         for body, depth in tensor.collision_bodies() if ok and collider is not None else ():

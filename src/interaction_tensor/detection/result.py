@@ -99,6 +99,40 @@ class Detection:
     #: (P,) int32 the place of each pair accepted when the places were cut, -1 for the
     #: others; None before ranking
     pair_place: np.ndarray | None = field(default=None, repr=False)
+    #: pair -> how far (m) its container was moved up (negative: down) to stand on what is
+    #: under it, NaN where nothing is (:meth:`lift`; a descriptor that asks for the filling
+    #: tests), for the pairs asked so far
+    lifts: dict = field(default_factory=dict, repr=False)
+
+    def lift(self, pair: int) -> float:
+        """How far (m) pair ``pair``'s container moves up (negative: down) to stand on the
+        highest surface under its base (:func:`~interaction_tensor.placement.taps.settle`):
+        a tap's height above the basin is not the example's. NaN where nothing is under it
+        within reach; 0 for a descriptor that does not ask for the filling tests."""
+        if not self.tensor.fills:
+            return 0.0
+        if pair not in self.lifts:
+            from interaction_tensor.placement import taps
+
+            pose = self.tensor.pose(self.scene.points[self.pair_point[pair]],
+                                    self.pair_angle(pair))
+            self.lifts[pair] = taps.settle(self.tensor.vessel(), pose[:3, :3], pose[:3, 3],
+                                           self.scene.points, self.scene.tree)
+        return self.lifts[pair]
+
+    def pair_angle(self, pair: int) -> float:
+        """The angle (radians) about +Z of pair ``pair``'s orientation."""
+        return 2 * np.pi * int(self.pair_orientation[pair]) / self.settings.n_orientations
+
+    def pair_pose(self, pair: int) -> np.ndarray:
+        """4x4 pose of pair ``pair`` (an index into the pair arrays): the descriptor's pose
+        at its test point and orientation, a container stood on what is under it
+        (:meth:`lift`, where there is something)."""
+        pose = self.tensor.pose(self.scene.points[self.pair_point[pair]], self.pair_angle(pair))
+        dz = self.lift(pair)
+        if np.isfinite(dz):
+            pose[2, 3] += dz
+        return pose
 
     @property
     def accepted(self) -> np.ndarray:
@@ -115,11 +149,10 @@ class Detection:
     def prediction(self, pair: int, place: int = -1) -> Prediction:
         """The :class:`~.places.Prediction` of pair ``pair`` (an index into the pair arrays)."""
         o, p = int(self.pair_orientation[pair]), int(self.pair_point[pair])
-        angle = 2 * np.pi * o / self.settings.n_orientations
-        position = self.scene.points[p]
-        return Prediction(position=position.copy(), orientation_index=o, angle=float(angle),
-                          score=float(self.pairs.score[pair]),
-                          pose=self.tensor.pose(position, angle), point_index=p, place=place)
+        return Prediction(position=self.scene.points[p].copy(), orientation_index=o,
+                          angle=float(self.pair_angle(pair)),
+                          score=float(self.pairs.score[pair]), pose=self.pair_pose(pair),
+                          point_index=p, place=place)
 
     def place_predictions(self, place: int, limit: int | None = None) -> list:
         """Every accepted pose of place ``place`` (an index into :attr:`places`), best

@@ -41,6 +41,7 @@ from interaction_tensor.placement.checks import (
     FAILS_INTERIOR,
     FAILS_MOUNT,
     FAILS_STRADDLE,
+    FAILS_TAP,
     FAILS_THROUGH,
     PLACED,
     UNTESTED,
@@ -190,6 +191,7 @@ def _finish(scene, tensor, settings, engine, threshold, test_idx, cand, pair_poi
         "pairs_accepted": int(pairs.accepted.sum()),
         "pairs_accepted_by_score": int(score_acc.sum()),
         "places": len(det.places),
+        "pairs_failing_tap": failing(FAILS_TAP),
         "pairs_failing_clearance": failing(FAILS_CLEARANCE),
         "pairs_failing_contact": failing(FAILS_CONTACT),
         "pairs_failing_interior": failing(FAILS_INTERIOR),
@@ -283,7 +285,7 @@ def empty_result_warnings(det) -> list:
 def _filtered(scene: Scene, tensor, settings: DetectSettings, test_idx) -> np.ndarray:
     """The test points whose normal passes the tensor's N_aff filter."""
     ok = candidate_mask(scene.normals[test_idx], tensor.affordance_normal,
-                        settings.normal_tolerance_deg, settings.oriented_normals)
+                        settings.normal_tolerance(tensor), settings.oriented_normals)
     return test_idx[ok]
 
 

@@ -278,3 +278,92 @@ def nearest_within(q, lo: float, hi: float, grid) -> np.ndarray:
                         np.asarray(grid.origin, np.float64), float(grid.cell),
                         np.asarray(grid.dims, np.int64), out)
     return out
+
+
+@njit(cache=True, parallel=True)
+def tap_hits(openings, radius, h_lo, h_hi, disk, max_cover, max_angle, cover_cell, eighth,
+             ten, pts, starts, origin, cell, dims, out):
+    """out[i] = 1 when a tap's spout is above opening i (:func:`.taps.tap_above`, the same
+    arithmetic): samples from ``h_lo`` to ``h_hi`` above it and within ``disk`` of its
+    vertical axis, some within ``radius``, covering at most ``max_cover`` of the disk in
+    ``cover_cell`` plan cells, and those beyond ``radius`` in no two opposite eighths
+    (``eighth``: pi / 4) and in at most ``max_angle`` degrees of 10-degree bins (``ten``:
+    10 degrees in radians)."""
+    ox, oy, oz = origin[0], origin[1], origin[2]
+    nx, ny, nz = dims[0], dims[1], dims[2]
+    side = int(2.0 * disk / cover_cell) + 4
+    for i in prange(openings.shape[0]):
+        cx, cy = openings[i, 0], openings[i, 1]
+        lo = openings[i, 2] + h_lo
+        hi = openings[i, 2] + h_hi
+        i0, i1 = _span(cx, disk, ox, cell, nx)
+        j0, j1 = _span(cy, disk, oy, cell, ny)
+        k0, k1 = _cells(lo, hi, oz, cell, nz)
+        fx = math.floor((cx - disk) / cover_cell) - 1
+        fy = math.floor((cy - disk) / cover_cell) - 1
+        covered = np.zeros((side, side), np.bool_)
+        eighths = np.zeros(8, np.bool_)
+        bins = np.zeros(36, np.bool_)
+        near = False
+        n_cover = 0
+        most = max_cover * math.pi * disk ** 2 / cover_cell ** 2
+        dead = False                  # a test already failed: the rest cannot save it
+        for a in range(i0, i1 + 1):
+            if dead:
+                break
+            for b in range(j0, j1 + 1):
+                if dead:
+                    break
+                base = (a * ny + b) * nz
+                for c in range(k0, k1 + 1):
+                    if dead:
+                        break
+                    for p in range(starts[base + c], starts[base + c + 1]):
+                        z = pts[p, 2]
+                        if z < lo or z > hi:
+                            continue
+                        dx = pts[p, 0] - cx
+                        dy = pts[p, 1] - cy
+                        r = math.sqrt(dx * dx + dy * dy)
+                        if r > disk:
+                            continue
+                        u = min(max(int(math.floor(pts[p, 0] / cover_cell) - fx), 0), side - 1)
+                        v = min(max(int(math.floor(pts[p, 1] / cover_cell) - fy), 0), side - 1)
+                        if not covered[u, v]:
+                            covered[u, v] = True
+                            n_cover += 1
+                            if n_cover > most + 1.0:      # surely past the cover allowed
+                                dead = True
+                                break
+                        if r <= radius:
+                            near = True
+                        else:
+                            angle = math.atan2(dy, dx) + math.pi
+                            e = int(min(max(math.floor(angle / eighth), 0.0), 7.0))
+                            eighths[e] = True
+                            if eighths[(e + 4) % 8]:
+                                dead = True
+                                break
+                            g = min(max(math.floor(angle / ten), 0.0), 35.0)
+                            bins[int(g)] = True
+        ok = near and not dead and n_cover * cover_cell ** 2 / (math.pi * disk ** 2) <= max_cover
+        if ok:
+            n = 0
+            for g in range(36):
+                if bins[g]:
+                    n += 1
+            ok = 10.0 * n <= max_angle
+        out[i] = 1 if ok else 0
+
+
+def taps(openings, radius, height, disk, max_cover, max_angle, grid,
+         cover_cell: float = 0.02) -> np.ndarray:
+    """(P,) bool :func:`tap_hits` on ``grid``."""
+    out = np.zeros(len(openings), np.int8)
+    if len(openings):
+        tap_hits(np.ascontiguousarray(openings, np.float64), float(radius), float(height[0]),
+                 float(height[1]), float(disk), float(max_cover), float(max_angle),
+                 float(cover_cell), float(np.pi / 4), float(np.radians(10)), grid.points,
+                 grid.starts, np.asarray(grid.origin, np.float64), float(grid.cell),
+                 np.asarray(grid.dims, np.int64), out)
+    return out.astype(bool)

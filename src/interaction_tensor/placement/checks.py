@@ -44,6 +44,7 @@ from interaction_tensor.engine.numba_backend import nearest_indices
 from interaction_tensor.engine.scoring import rotation_z
 from interaction_tensor.geometry.core import Geometry
 from interaction_tensor.geometry.sampling import sample_mesh
+from interaction_tensor.placement import taps
 
 #: How much nearer (m) than in the example the scene may come to a clearance point: a little
 #: closer than the example, never through the object (the clearance test).
@@ -113,6 +114,11 @@ THROUGH_MIN_ANGLE = 30.0
 #: samples a placement at 1 cm, each tested against every edge of the polygon (about 25:
 #: 400 bytes each), so a chunk takes some 60 MB.
 THROUGH_CHUNK = 4_000
+#: A placement of a container (a descriptor that asks for the filling tests,
+#: :attr:`~.descriptor.InteractionTensor.fills`) with no tap's spout above its opening
+#: (:func:`tap_passes`): asked of every pair first, it rejects all but a few hundred of a
+#: kitchen's hundreds of thousands (shelves, cabinets and table tops cover the opening).
+FAILS_TAP = 10
 #: Contact modes: no contact test, the main group (at the reference point), every group,
 #: or a person's seat region (:func:`seat_region`).
 CONTACT_MODES = ("off", "main", "all", "seat")
@@ -621,8 +627,19 @@ def through_crossed_poses(poses, tensor, scene, grid=None) -> np.ndarray:
     return through_crossed_at(poses[:, :3, :3], poses[:, :3, 3], tensor, scene, grid)
 
 
+def tap_passes(points, orient, tensor, scene, n_orientations: int, grid=None) -> np.ndarray:
+    """(P,) whether a tap's spout is above the opening of the container posed at test points
+    ``points`` (P, 3) in orientations ``orient`` (P,) (:func:`.taps.taps_above`; the Numba
+    kernel on ``grid``, else the reference)."""
+    vessel = tensor.vessel()
+    offsets = point_offsets(vessel.opening, tensor.reference_point, n_orientations)[:, 0]
+    openings = np.asarray(points, float) + offsets[np.asarray(orient, np.int64)]
+    return taps.taps_above(openings, scene.points, scene.tree, grid)
+
+
 def check_placements(points, orient, tensor, settings, scene, grid=None):
-    """The placement tests of pairs the score accepted, in order: clearance (every pair),
+    """The placement tests of pairs the score accepted, in order: tap (a container's, when
+    the descriptor asks for the filling tests: :func:`tap_passes`), clearance (every pair),
     contact (those that kept their clearance), interior (those that also kept their
     contact), ground (when the descriptor has ``below_ground``: the query object no deeper
     than that below the scene's ground), feet (when the descriptor has ``feet_reach``: its
@@ -647,13 +664,18 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
     outcome = np.full(p, PLACED, np.int8)
     viol = np.zeros(p, np.int64)
     k = len(tensor.clearance_points)
-    if settings.runs("clearance") and k and p:
+    if settings.runs("fills") and tensor.fills and p:
+        outcome[~tap_passes(points, orient, tensor, scene, n_o, grid)] = FAILS_TAP
+        viol[outcome == FAILS_TAP] = -1                   # clearance not tested
+    todo = np.flatnonzero(outcome == PLACED)
+    if settings.runs("clearance") and k and len(todo):
         limit = tensor.clearance_limit
         # a pair fails past limit * k violations: its count stops at the first past it
-        viol = count_violations(points, orient, clearance_offsets(tensor, n_o),
-                                tensor.clearance_radius, CLEARANCE_TOLERANCE, scene,
-                                grid, stop=int(np.floor(limit * k)) + 1)
-        outcome[viol > limit * k] = FAILS_CLEARANCE
+        viol[todo] = count_violations(points[todo], orient[todo],
+                                      clearance_offsets(tensor, n_o), tensor.clearance_radius,
+                                      CLEARANCE_TOLERANCE, scene, grid,
+                                      stop=int(np.floor(limit * k)) + 1)
+        outcome[todo[viol[todo] > limit * k]] = FAILS_CLEARANCE
     mode = tensor.contact_groups if settings.runs("contact") else "off"
     todo = np.flatnonzero(outcome == PLACED)
     if mode == "seat" and len(todo):

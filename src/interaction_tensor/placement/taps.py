@@ -9,10 +9,15 @@ round the container (:func:`basin_sectors`), with a bottom the water reaches, cl
 round by walls that rise from it (:func:`sink_sectors`: not a shelf inside a cabinet under
 the counter, not the floor under a seat).
 
+A tap's height above the basin differs from kitchen to kitchen, so the container's height
+under the tap is not the example's: detection stands it on the highest surface under its base
+(:func:`settle`) before asking the rest.
+
 The paper's judge applies the same functions to the poses it judges
-(:mod:`itensor_paper.judge`), detection to the ranked poses of a descriptor that asks for
-them (:attr:`~interaction_tensor.descriptor.InteractionTensor.fills`), with the container's
-:class:`Vessel` measured from its example.
+(:mod:`itensor_paper.judge`), detection to the placements of a descriptor that asks for them
+(:attr:`~interaction_tensor.descriptor.InteractionTensor.fills`: the tap test of every pair,
+with :func:`taps_above`, before the score; settling, basin and sink of the ranked ones), with
+the container's :class:`Vessel` measured from its example.
 """
 
 from __future__ import annotations
@@ -29,6 +34,8 @@ TAP_RANGE = (0.02, 0.30)
 #: this much (a shelf or a ceiling covers it)...
 TAP_DISK = 0.15
 TAP_MAX_COVER = 0.5
+#: ... counted in plan cells of this edge (m)...
+TAP_CELL = 0.02
 #: ... reaching over the opening from one side (no two opposite eighths of the disk both
 #: hold surface) and spanning at most this many degrees round the axis (a bar, a board's
 #: front edge or a monitor's bezel runs across the opening: 220-280 degrees).
@@ -51,18 +58,38 @@ SINK_REACH = 0.35
 SINK_SECTORS = 33
 #: Plan cell (m) in which sink bottoms are thinned and checked open above.
 SINK_CELL = 0.03
+#: Settling: the container's base goes down at most this far (m) onto what is under it (a
+#: tap 31 cm above a basin's bottom where the example's was 19 cm above the mug's base; the
+#: tap test reaches 30 cm above the opening)...
+SETTLE_DROP = 0.20
+#: ... or up at most this far (m), out of a surface it sank into (the collision test's depth).
+SETTLE_RISE = 0.01
+#: Samples within this (m) of a container's lowest point are its base (:attr:`Vessel.foot`).
+BASE_BAND = 0.01
+#: It stands (:func:`stands`) where the scene samples from this far (m) below its base to
+#: this far above it, under its outline, surround its centre of mass by this margin (m)
+#: (the judge's support test).
+SUPPORT_BELOW = 0.02
+SUPPORT_ABOVE = 0.01
+SUPPORT_MARGIN = 0.01
 
 
 @dataclass(frozen=True)
 class Vessel:
     """A container in its own frame: the centre of its ``opening`` (3,) (its rim's, at its
-    top), its centre of mass ``com`` (3,), its ``support`` height (its lowest point's) and
-    ``side``, how far (m) its side reaches from the vertical through ``com``."""
+    top), its centre of mass ``com`` (3,), its ``support`` height (its lowest point's),
+    ``side``, how far (m) its side reaches from the vertical through ``com``, and its base:
+    the plan centre ``base`` (2,) and radius ``foot`` (m) of what lies within
+    :data:`BASE_BAND` of its lowest point, and its ``outline`` (K, 2), the convex hull of
+    its plan, counter-clockwise."""
 
     opening: np.ndarray
     com: np.ndarray
     support: float
     side: float
+    base: np.ndarray
+    foot: float
+    outline: np.ndarray
 
     @classmethod
     def of(cls, samples: np.ndarray, rim: float = 0.01) -> "Vessel":
@@ -72,8 +99,16 @@ class Vessel:
         top = samples[:, 2].max()
         ring = samples[samples[:, 2] >= top - rim]
         com = samples.mean(axis=0)
-        return cls(np.r_[ring[:, :2].mean(axis=0), top], com, float(samples[:, 2].min()),
-                   float(np.linalg.norm(samples[:, :2] - com[:2], axis=1).max()))
+        low = float(samples[:, 2].min())
+        sole = samples[samples[:, 2] <= low + BASE_BAND, :2]
+        base = sole.mean(axis=0)
+        from scipy.spatial import ConvexHull
+
+        plan = samples[:, :2]
+        return cls(np.r_[ring[:, :2].mean(axis=0), top], com, low,
+                   float(np.linalg.norm(plan - com[:2], axis=1).max()), base,
+                   float(np.linalg.norm(sole - base, axis=1).max()),
+                   plan[ConvexHull(plan).vertices])
 
 
 def tap_above(points: np.ndarray, tree, opening, radius: float = TAP_RADIUS,
@@ -94,7 +129,7 @@ def tap_above(points: np.ndarray, tree, opening, radius: float = TAP_RADIUS,
     r = np.linalg.norm(p[:, :2] - opening[:2], axis=1)
     if not (r <= radius).any():
         return False
-    cell = 0.02
+    cell = TAP_CELL
     cells = np.unique(np.floor(p[r <= disk, :2] / cell).astype(np.int64), axis=0)
     if len(cells) * cell ** 2 / (np.pi * disk ** 2) > max_cover:
         return False
@@ -106,6 +141,73 @@ def tap_above(points: np.ndarray, tree, opening, radius: float = TAP_RADIUS,
     eighths[np.clip(np.floor(angle / (np.pi / 4)), 0, 7).astype(np.int64)] = True
     bins = np.unique(np.clip(np.floor(angle / np.radians(10)), 0, 35))
     return bool(not (eighths[:4] & eighths[4:]).any() and 10.0 * len(bins) <= max_angle)
+
+
+def taps_above(openings: np.ndarray, points: np.ndarray, tree, grid=None) -> np.ndarray:
+    """(P,) :func:`tap_above` of each of ``openings`` (P, 3), with the default limits: the
+    Numba kernel on the scene's ``grid`` (cells sorted as ``points``), else the reference,
+    one opening at a time."""
+    openings = np.asarray(openings, float).reshape(-1, 3)
+    if grid is not None:
+        from interaction_tensor.placement import _kernels
+
+        return _kernels.taps(openings, TAP_RADIUS, TAP_RANGE, TAP_DISK, TAP_MAX_COVER,
+                             TAP_MAX_ANGLE, grid, TAP_CELL)
+    return np.array([tap_above(points, tree, o) for o in openings], bool)
+
+
+def settle(vessel: Vessel, rot: np.ndarray, t: np.ndarray, points: np.ndarray, tree,
+           drop: float = SETTLE_DROP, rise: float = SETTLE_RISE) -> float:
+    """How far (m) to move ``vessel`` posed by ``rot`` (a turn about +Z) and ``t`` up
+    (positive) or down so that its base stands on the highest scene sample under it (within
+    its :attr:`~Vessel.foot` of the base's vertical, from ``drop`` below the base to
+    ``rise`` above it); NaN where there is none (it would fall)."""
+    base = rot @ np.r_[vessel.base, vessel.support] + t
+    lo, hi = base[2] - drop, base[2] + rise
+    idx = np.asarray(tree.query_ball_point([base[0], base[1], (lo + hi) / 2],
+                                           float(np.hypot(vessel.foot, (hi - lo) / 2))),
+                     np.int64)
+    p = points[idx]
+    under = ((p[:, 2] >= lo) & (p[:, 2] <= hi)
+             & (np.hypot(p[:, 0] - base[0], p[:, 1] - base[1]) <= vessel.foot))
+    return float(p[under, 2].max() - base[2]) if under.any() else float("nan")
+
+
+def support_margin(vessel: Vessel, rot: np.ndarray, t: np.ndarray, points: np.ndarray, tree,
+                   below: float = SUPPORT_BELOW, above: float = SUPPORT_ABOVE) -> float:
+    """How far (m) the centre of mass of ``vessel`` posed by ``rot`` (a turn about +Z) and
+    ``t`` lies inside the plan hull of the scene samples that bear it: from ``below`` under
+    its base to ``above`` over it, inside its outline (negative outside; -inf with fewer
+    than three, or none in a hull)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    com = rot @ vessel.com + t
+    z0 = vessel.support + t[2]
+    outline = vessel.outline @ rot[:2, :2].T + t[:2]
+    reach = float(np.linalg.norm(outline - com[:2], axis=1).max())
+    idx = np.asarray(tree.query_ball_point([com[0], com[1], z0 + (above - below) / 2],
+                                           float(np.hypot(reach, (above + below) / 2))),
+                     np.int64)
+    p = points[idx]
+    p = p[(p[:, 2] >= z0 - below) & (p[:, 2] <= z0 + above), :2]
+    edge = np.roll(outline, -1, axis=0) - outline          # counter-clockwise: inside left
+    cross = (edge[None, :, 0] * (p[:, None, 1] - outline[None, :, 1])
+             - edge[None, :, 1] * (p[:, None, 0] - outline[None, :, 0]))
+    p = p[(cross >= -1e-12).all(axis=1)]
+    if len(p) < 3:
+        return -np.inf
+    try:
+        eq = ConvexHull(p).equations
+    except (QhullError, ValueError):
+        return -np.inf
+    return float(-(eq[:, :2] @ com[:2] + eq[:, 2]).max())
+
+
+def stands(vessel: Vessel, rot: np.ndarray, t: np.ndarray, points: np.ndarray, tree,
+           margin: float = SUPPORT_MARGIN) -> bool:
+    """Whether ``vessel`` posed so stands: its centre of mass at least ``margin`` inside
+    what bears it (:func:`support_margin`), not tipping off a divider's edge."""
+    return support_margin(vessel, rot, t, points, tree) >= margin
 
 
 def basin_sectors(points: np.ndarray, tree, com, support: float, rim: float, side: float,
@@ -199,13 +301,14 @@ def sink_sectors(points: np.ndarray, normals: np.ndarray, tree, opening, support
 def fills(vessel: Vessel, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
           normals: np.ndarray, tree, spacing: float) -> bool:
     """Whether ``vessel`` posed upright (``rot`` (3, 3) a turn about +Z, ``t`` (3,)) could
-    be filled where it stands: a tap above its opening, a basin round it
-    (:data:`BASIN_SECTORS`) and a sink under it (:data:`SINK_SECTORS`), asked in that order
-    (the sink, the costliest, last)."""
+    be filled where it stands: a tap above its opening, standing on what bears it
+    (:func:`stands`), a basin round it (:data:`BASIN_SECTORS`) and a sink under it
+    (:data:`SINK_SECTORS`), asked in that order (the sink, the costliest, last)."""
     opening = rot @ vessel.opening + t
     com = rot @ vessel.com + t
     support = float(vessel.support + t[2])
     return (tap_above(points, tree, opening)
+            and stands(vessel, rot, t, points, tree)
             and basin_sectors(points, tree, com, support, float(opening[2]), vessel.side,
                               spacing) >= BASIN_SECTORS
             and sink_sectors(points, normals, tree, opening, support) >= SINK_SECTORS)
