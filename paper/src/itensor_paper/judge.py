@@ -180,9 +180,9 @@ class JudgeSettings:
     person_contact_fraction: float = 0.02
     seat_region_height: float = 0.03
     main_contact_radius: float = 0.3
-    support_below: float = 0.02
-    support_above: float = 0.01
-    support_margin: float = 0.01
+    support_below: float = taps.SUPPORT_BELOW
+    support_above: float = taps.SUPPORT_ABOVE
+    support_margin: float = taps.SUPPORT_MARGIN
     overhead_radius: float = taps.TAP_RADIUS
     overhead_range: tuple = taps.TAP_RANGE
     overhead_disk: float = taps.TAP_DISK
@@ -576,23 +576,10 @@ class Judge:
                                                    + self.radius)
 
     def _support_margin(self, local, z0, samples, com) -> float:
-        from scipy.spatial import ConvexHull, QhullError
-
+        """:func:`.taps.margin_inside_support` of the posed ``samples`` over ``local``."""
         st = self.settings
-        band = local[(local[:, 2] >= z0 - st.support_below) & (local[:, 2] <= z0 + st.support_above)]
-        if len(band) < 3:
-            return -np.inf
-        try:
-            foot = ConvexHull(samples[:, :2]).equations
-            under = band[(band[:, :2] @ foot[:, :2].T + foot[:, 2]).max(axis=1) <= 1e-9]
-            if len(under) < 3:
-                return -np.inf
-            hull = ConvexHull(under[:, :2])
-        except (QhullError, ValueError):
-            return -np.inf
-        # signed distance of the centre of mass inside the hull (positive inside)
-        eq = hull.equations
-        return float(-(eq[:, :2] @ com[:2] + eq[:, 2]).max())
+        return taps.margin_inside_support(local, z0, samples[:, :2], com, st.support_below,
+                                          st.support_above)
 
     def _overhead(self, scene: JudgeScene, opening) -> bool:
         """A tap's spout above the opening (:func:`.taps.tap_above`)."""

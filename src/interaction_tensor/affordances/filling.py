@@ -36,9 +36,13 @@ AFFORDANCE = Affordance(
               ExampleSpec("filling-cup", "a cup in a sink under the tap", shapes.cup,
                           "hoi4d_mug.ply")),
     pose=pose,
-    # S_aff and the clearance limit of largest F1 against the judge on the validation rooms'
-    # pairs; the collision and through tests chosen on the labelled set; the filling tests
-    # (a tap above, a basin round it, a sink under it) the judge's.
+    # The clearance limit of largest F1 against the judge on the validation rooms' pairs; the
+    # collision test chosen on the labelled set; the filling tests (a tap above, standing, a
+    # basin round it, a sink under it) the judge's, and they decide: S_aff is the bottom of
+    # the tuning's range, as real taps score 0.07-0.26 (the validation rooms' sinks, built
+    # like the example's, score high). Settling stands the mug on its support, so there is
+    # no through test (what went through the mug was that support). The normal tolerance:
+    # a spout's underside turns 25 degrees off straight down.
     acceptance=dict(threshold=0.02, gaussian_threshold=0.675,
                     clearance_limit=0.02, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),

@@ -114,8 +114,7 @@ class Detection:
         if pair not in self.lifts:
             from interaction_tensor.placement import taps
 
-            pose = self.tensor.pose(self.scene.points[self.pair_point[pair]],
-                                    self.pair_angle(pair))
+            pose = self._scored_pose(pair)
             self.lifts[pair] = taps.settle(self.tensor.vessel(), pose[:3, :3], pose[:3, 3],
                                            self.scene.points, self.scene.tree)
         return self.lifts[pair]
@@ -124,11 +123,16 @@ class Detection:
         """The angle (radians) about +Z of pair ``pair``'s orientation."""
         return 2 * np.pi * int(self.pair_orientation[pair]) / self.settings.n_orientations
 
+    def _scored_pose(self, pair: int) -> np.ndarray:
+        """The descriptor's pose at pair ``pair``'s test point and orientation: the one its
+        score and placement tests are of."""
+        return self.tensor.pose(self.scene.points[self.pair_point[pair]], self.pair_angle(pair))
+
     def pair_pose(self, pair: int) -> np.ndarray:
         """4x4 pose of pair ``pair`` (an index into the pair arrays): the descriptor's pose
         at its test point and orientation, a container stood on what is under it
         (:meth:`lift`, where there is something)."""
-        pose = self.tensor.pose(self.scene.points[self.pair_point[pair]], self.pair_angle(pair))
+        pose = self._scored_pose(pair)
         dz = self.lift(pair)
         if np.isfinite(dz):
             pose[2, 3] += dz

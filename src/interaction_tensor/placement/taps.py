@@ -173,14 +173,32 @@ def settle(vessel: Vessel, rot: np.ndarray, t: np.ndarray, points: np.ndarray, t
     return float(p[under, 2].max() - base[2]) if under.any() else float("nan")
 
 
-def support_margin(vessel: Vessel, rot: np.ndarray, t: np.ndarray, points: np.ndarray, tree,
-                   below: float = SUPPORT_BELOW, above: float = SUPPORT_ABOVE) -> float:
-    """How far (m) the centre of mass of ``vessel`` posed by ``rot`` (a turn about +Z) and
-    ``t`` lies inside the plan hull of the scene samples that bear it: from ``below`` under
-    its base to ``above`` over it, inside its outline (negative outside; -inf with fewer
-    than three, or none in a hull)."""
+def margin_inside_support(points: np.ndarray, z0: float, footprint: np.ndarray, com,
+                          below: float = SUPPORT_BELOW, above: float = SUPPORT_ABOVE) -> float:
+    """How far (m) ``com`` (3,) lies inside the plan hull of the scene ``points`` (N, 3)
+    that bear an object: from ``below`` under the height ``z0`` of its base to ``above``
+    over it, inside the plan hull of its ``footprint`` (K, 2) (negative outside; -inf with
+    fewer than three, or none in a hull). The judge's support test, and :func:`stands`."""
     from scipy.spatial import ConvexHull, QhullError
 
+    band = points[(points[:, 2] >= z0 - below) & (points[:, 2] <= z0 + above)]
+    if len(band) < 3:
+        return -np.inf
+    try:
+        foot = ConvexHull(footprint).equations
+        under = band[(band[:, :2] @ foot[:, :2].T + foot[:, 2]).max(axis=1) <= 1e-9]
+        if len(under) < 3:
+            return -np.inf
+        eq = ConvexHull(under[:, :2]).equations
+    except (QhullError, ValueError):
+        return -np.inf
+    return float(-(eq[:, :2] @ np.asarray(com, float)[:2] + eq[:, 2]).max())
+
+
+def support_margin(vessel: Vessel, rot: np.ndarray, t: np.ndarray, points: np.ndarray, tree,
+                   below: float = SUPPORT_BELOW, above: float = SUPPORT_ABOVE) -> float:
+    """:func:`margin_inside_support` of ``vessel`` posed by ``rot`` (a turn about +Z) and
+    ``t``: its centre of mass inside what bears its base, within its outline."""
     com = rot @ vessel.com + t
     z0 = vessel.support + t[2]
     outline = vessel.outline @ rot[:2, :2].T + t[:2]
@@ -188,19 +206,7 @@ def support_margin(vessel: Vessel, rot: np.ndarray, t: np.ndarray, points: np.nd
     idx = np.asarray(tree.query_ball_point([com[0], com[1], z0 + (above - below) / 2],
                                            float(np.hypot(reach, (above + below) / 2))),
                      np.int64)
-    p = points[idx]
-    p = p[(p[:, 2] >= z0 - below) & (p[:, 2] <= z0 + above), :2]
-    edge = np.roll(outline, -1, axis=0) - outline          # counter-clockwise: inside left
-    cross = (edge[None, :, 0] * (p[:, None, 1] - outline[None, :, 1])
-             - edge[None, :, 1] * (p[:, None, 0] - outline[None, :, 0]))
-    p = p[(cross >= -1e-12).all(axis=1)]
-    if len(p) < 3:
-        return -np.inf
-    try:
-        eq = ConvexHull(p).equations
-    except (QhullError, ValueError):
-        return -np.inf
-    return float(-(eq[:, :2] @ com[:2] + eq[:, 2]).max())
+    return margin_inside_support(points[idx], z0, outline, com, below, above)
 
 
 def stands(vessel: Vessel, rot: np.ndarray, t: np.ndarray, points: np.ndarray, tree,
