@@ -91,9 +91,14 @@ CONTACT_OPTIONS = (("off", CONTACT_DISTANCES[0], CONTACT_FRACTIONS[0], 90.0),) +
 #: (:data:`~interaction_tensor.affordances.acceptances`) and applied as detection does: the ground,
 #: feet, straddle and mount tests to every pair (column ``fixed``), the exact collision,
 #: through-the-hook, hanging and filling tests to the pairs judged and ranked (column ``free``,
-#: :class:`~interaction_tensor.detection.ranking.CollisionCheck`).
+#: :class:`~interaction_tensor.detection.ranking.CollisionCheck`), and the normal filter's
+#: tolerance where the affordance carries its own (filling's spouts).
 FIXED_TESTS = ("below_ground", "feet_reach", "straddle", "mount_height", "collision",
-               "through", "hangs", "fills")
+               "through", "hangs", "fills", "normal_tolerance")
+#: The tests detection asks of ranked pairs only
+#: (:class:`~interaction_tensor.detection.ranking.CollisionCheck`): the judged and ranked
+#: pairs' column ``free``.
+RANKED_TESTS = ("collision", "hangs", "fills")
 #: The most lenient placement tests tried: the stratification's second key.
 LENIENT = {"limit": max(LIMITS),
            "interior_limit": max(v for v in INTERIOR_LIMITS if v < 1),
@@ -279,8 +284,9 @@ def tune(settings: TuneSettings | None = None, log=print) -> TuneResult:
             t1 = time.perf_counter()
             det = detect(scene, tensor, it.DetectSettings(
                 criterion=st.criterion, threshold=1e-9, seed=st.seed,
-                # the tests tuned here are measured as features; the collision test ranks
-                skip_tests=tuple(t for t in PLACEMENT_TESTS if t != "collision")),
+                # the tests of every pair are measured as features (columns); the ranked
+                # pairs' tests (collision, hanging, filling) are column ``free``
+                skip_tests=tuple(t for t in PLACEMENT_TESTS if t not in RANKED_TESTS)),
                 test_indices=test, engine=Engine(
                     # the features: every pair's full score (the threshold accepts them all)
                     score_first=True, rank=False, neighbour_cache=True,
