@@ -36,15 +36,18 @@ AFFORDANCE = Affordance(
               ExampleSpec("filling-cup", "a cup in a sink under the tap", shapes.cup,
                           "hoi4d_mug.ply")),
     pose=pose,
-    # The clearance limit of largest F1 against the judge on the validation rooms' pairs; the
-    # collision test chosen on the labelled set; the filling tests (a tap above, standing, a
-    # basin round it, a sink under it) the judge's, and they decide: S_aff is the bottom of
-    # the tuning's range, as real taps score 0.07-0.26 (the validation rooms' sinks, built
-    # like the example's, score high). Settling stands the mug on its support, so there is
-    # no through test (what went through the mug was that support). The normal tolerance:
-    # a spout's underside turns 25 degrees off straight down.
-    acceptance=dict(threshold=0.02, gaussian_threshold=0.675,
-                    clearance_limit=0.02, interior_limit=1.0,
+    # The clearance limit of largest F1 against the judge on the validation rooms' pairs,
+    # with the filling tests applied first; the collision test chosen on the labelled set;
+    # the filling tests (a tap above, standing, a basin round it, a sink under it) the
+    # judge's. They decide: every S_aff from 0.02 to 0.16 gives the validation rooms the
+    # same precision and recall (no valid pair there scores below 0.17), and the lowest is
+    # kept, as taps unlike the example's score lower (0.05-0.07 under kitchen3's spout).
+    # The gaussian criterion's S_aff is its tuning's choice.
+    # Settling stands the mug on its support, so there is no through test (what went
+    # through the mug was that support). The normal tolerance: a spout's underside turns
+    # 25 degrees off straight down.
+    acceptance=dict(threshold=0.02, gaussian_threshold=0.02,
+                    clearance_limit=0.10, interior_limit=1.0,
                     contact=("off", 0.02, 0.1, 90.0),
                     collision=[(0.01, None)], through=False, fills=True,
                     normal_tolerance=30.0),
