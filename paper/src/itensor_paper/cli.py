@@ -163,6 +163,24 @@ def cmd_panel_agreement(args) -> int:
     return 0
 
 
+def cmd_own(args) -> int:
+    from itensor_paper import own
+    from interaction_tensor.geometry.files import atomic_dir
+
+    st = own.OwnSettings(examples=tuple(args.examples or own.OwnSettings().examples),
+                         top_k=args.top_k, sample_fraction=args.sample_fraction,
+                         seed=args.seed)
+    log = (lambda _s: None) if args.quiet else (lambda s: print(s, flush=True))
+    with atomic_dir(args.output, "own.md", ("own.md", "own.csv", "results")) as tmp:
+        rows = own.evaluate(st, tmp / "results", log)
+        own.write(rows, tmp)
+    if args.summary:
+        own.write(rows, args.summary)
+    if not args.quiet:
+        print(own.summary_markdown(rows))
+    return 0
+
+
 def cmd_summary(args) -> int:
     out = write_summary(args.run, args.output)
     if not args.quiet:
@@ -264,6 +282,26 @@ def register(sub) -> None:
                    help="the summary folder (replaced whole)")
     quiet_option(p)
     p.set_defaults(func=cmd_summary)
+
+    from itensor_paper.own import EXAMPLES as OWN
+
+    p = sub.add_parser("own", help="train six interactions of a user's own without a preset "
+                                   "and judge what detection accepts in rooms that hold a "
+                                   "place for them and rooms that hold none")
+    p.add_argument("-o", "--output", required=True,
+                   help="output directory (own.md, own.csv, each result in results/)")
+    p.add_argument("--examples", nargs="*", choices=[e.name for e in OWN], metavar="EXAMPLE",
+                   help="only these (default: all six: "
+                        + ", ".join(e.name for e in OWN) + ")")
+    p.add_argument("--top-k", type=_positive_int, default=10,
+                   help="predictions judged per room")
+    p.add_argument("--sample-fraction", type=_fraction, default=None,
+                   help="test-point fraction (default: detect's)")
+    p.add_argument("--summary", default=None,
+                   help="also write own.md and own.csv here (paper/results: the tracked copy)")
+    seed_option(p)
+    quiet_option(p)
+    p.set_defaults(func=cmd_own)
 
     p = sub.add_parser("panel-sheets",
                        help="draw rating sheets for a blind panel from an evaluation's judged "

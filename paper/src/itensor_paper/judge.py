@@ -315,11 +315,13 @@ class Judge:
     affordance : a registered affordance (:mod:`interaction_tensor.affordances`)
     support_point : (3,) the point of the scene-object the interaction rests on
     loop : hanging only: (centre (3,), inner radius, axis (3,)) of the hook or strap loop
+    rule : the rule to judge by (:class:`~interaction_tensor.affordances.JudgeRule`);
+        default: the registered ``affordance``'s
     """
 
     def __init__(self, query, scene_object, affordance: str, support_point, loop=None,
-                 settings: JudgeSettings | None = None):
-        rule = affordances.get(affordance).judge
+                 settings: JudgeSettings | None = None, rule=None):
+        rule = rule or affordances.get(affordance).judge
         if not query.is_mesh:
             raise InputError(query.source, "the judge needs the query object as a mesh")
         self.settings = st = settings or JudgeSettings()

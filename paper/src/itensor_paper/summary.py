@@ -28,7 +28,7 @@ from itensor_paper.runner import METHODS, metrics
 COPIED = {"table1.md": "table1.md", "table1.csv": "table1.csv",
           "judge_accuracy.csv": "judge_accuracy.csv"}
 #: Files a summary may also hold (written by other commands into the same folder).
-ALSO = ("panel_agreement.csv",)
+ALSO = ("panel_agreement.csv", "own.md", "own.csv")
 #: The method whose pictures the summary shows.
 METHOD = "iT-weighted"
 
