@@ -120,12 +120,14 @@ def test_point_clouds_and_descriptors_without_a_depth_skip_the_test(hanging):
     hung = it.detect(cloud, tensor, it.DetectSettings(**OPEN), test_indices=mine)
     assert hung.stats["hanging_test"] == "on" and hung.stats["pairs_not_hanging"] > 0
     assert hung.predictions == []
-    # untuned, the descriptor carries its own example's collision test and no through test
+    # untuned, the descriptor carries its own example's collision test, and the through
+    # test its hanging example derived (descriptor/calibration.py)
     bare = affordances.build_descriptor("hanging-hanger", tuned=False)
-    assert bare.collision_tests == ((0.01, None),) and not bare.through
-    assert bare.through_body() is None
-    bare.set_acceptance(bare.threshold(), collision="off")
+    assert bare.collision_tests == ((0.01, None),) and bare.through and bare.hangs
+    assert bare.through_body() is not None
+    bare.set_acceptance(bare.threshold(), collision="off", through=False)
     assert bare.collision_tests == () and bare.collision_bodies() == []
+    assert bare.through_body() is None
     assert CollisionCheck(it.detect(scene, bare, it.DetectSettings(**OPEN),
                                     test_indices=top[:10])).reason.startswith("off")
 

@@ -242,8 +242,10 @@ def test_default_detection_keeps_the_papers_partial_scores(corner_tensor):
     stage comes first."""
     scene_geometry, _ = moved_corner_scene(0.4, np.array([0.1, -0.2, 0.0]))
     scene = it.prepare_scene(scene_geometry, 0.01, seed=6)
-    det = detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2),
-                 engine=Engine(score_first=True))
+    # a threshold that both accepts and rejects many of this scene's pairs
+    settings = it.DetectSettings(sample_fraction=0.2,
+                                 threshold=0.9 * corner_tensor.self_scores["paper-weighted"])
+    det = detect(scene, corner_tensor, settings, engine=Engine(score_first=True))
     table = corner_tensor.keypoint_table(det.settings)
     ref = score_pairs(scene.points[det.pair_point], det.pair_orientation, table, scene,
                       det.threshold, vectors=corner_tensor.vectors)
@@ -253,7 +255,7 @@ def test_default_detection_keeps_the_papers_partial_scores(corner_tensor):
     np.testing.assert_array_equal(det.pairs.decided_at, ref.decided_at)
     np.testing.assert_allclose(det.pairs.score, ref.score, atol=1e-9)
     # tests first (the default): the pairs it scores keep the very same partial scores
-    first = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.2))
+    first = it.detect(scene, corner_tensor, settings)
     np.testing.assert_array_equal(first.pairs.accepted, det.pairs.accepted)
     assert first.scored.any() and not first.scored.all()
     np.testing.assert_array_equal(first.pairs.decided_at[first.scored],
@@ -299,7 +301,8 @@ def test_torch_backend_decides_like_the_cpu_paths(corner_tensor, scored_setup, c
     pp, po = pp[::3], po[::3]
     settings = it.DetectSettings(criterion=criterion)
     table = corner_tensor.keypoint_table(settings)
-    thr = corner_tensor.threshold(criterion, "weighted")
+    # thresholds that accept some of these pairs and reject others
+    thr = 0.9 * corner_tensor.self_scores["paper-weighted"] if criterion == "paper" else 0.5
     ref = score_pairs(scene.points[pp], po, table, scene, thr)
     assert 0 < ref.accepted.sum() < len(pp)
     # small tiles so that many queries fall back to the tree and tiles border each other
@@ -331,9 +334,11 @@ def test_torch_backend_detection_matches_numba(corner_tensor, device):
     pytest.importorskip("torch")
     scene_geometry, _ = moved_corner_scene(1.0, np.array([0.2, 0.1, 0.0]))
     scene = it.prepare_scene(scene_geometry, 0.01, seed=1)
+    thr = 0.9 * corner_tensor.self_scores["paper-weighted"]     # accepts some pairs here
     a = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.015, backend="torch",
-                                                          device=device))
-    b = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.015, backend="numba"))
+                                                          device=device, threshold=thr))
+    b = it.detect(scene, corner_tensor, it.DetectSettings(sample_fraction=0.015, backend="numba",
+                                                          threshold=thr))
     assert a.pairs.accepted.any()
     np.testing.assert_array_equal(a.pairs.accepted, b.pairs.accepted)
     np.testing.assert_array_equal(a.pairs.decided_at, b.pairs.decided_at)

@@ -42,7 +42,7 @@ def _check(result, threshold, pairs, accepted, heat_sum, top):
 def test_the_demo_finds_what_it_found():
     ex = demo.build()
     tensor = it.train(ex.query, ex.scene_object, "placing-bowl", spacing=demo.DEMO_SPACING)
-    _check(it.detect(ex.scene, tensor, seed=0), 0.785742188, 293712, 91057, 36371.994141,
+    _check(it.detect(ex.scene, tensor, seed=0), 0.785791015625, 293712, 91057, 36371.994141,
            DEMO_TOP)
 
 

@@ -77,8 +77,8 @@ def train(query, scene_object, affordance: str = "interaction", *, acceptance: s
         trimesh or Open3D geometry, a Geometry or an (N, 3) array)
     affordance : the interaction's name, e.g. ``"placing-bowl"``
     acceptance : accept as one of the paper's affordances was tuned to (``"placing"``,
-        ``"filling"``, ``"hanging"``, ``"sitting"``, ``"riding"``) instead of at 0.9 x the
-        example's own score
+        ``"filling"``, ``"hanging"``, ``"sitting"``, ``"riding"``) instead of the acceptance
+        derived from the example (:mod:`~interaction_tensor.descriptor.calibration`)
     normal : the expected scene normal N_aff: ``"up"``, ``"down"`` (filling under a tap) or a
         3-vector
     spacing : scene-object sample spacing in metres; detection samples mesh scenes the same way

@@ -66,10 +66,11 @@ class TrainSettings:
     #: Contact: query samples within this distance (m) of the scene-object, plus the smallest
     #: gap, define the contact region whose centre gives the reference point (ours).
     contact_tolerance: float = 0.01
-    #: Acceptance threshold of the paper criterion as a fraction of the score that the
-    #: training example itself gets on a re-sampled copy of its scene-object (ours; the paper
-    #: tunes S_aff by hand per affordance).
-    calibration_ratio: float = 0.9
+    #: Acceptance threshold of each criterion as a fraction of the lowest score the training
+    #: example gets on perturbed copies of its scene-object (other samplings, densities,
+    #: noise, sizes, turns: :mod:`~interaction_tensor.descriptor.calibration`; ours, the
+    #: paper tunes S_aff by hand per affordance).
+    calibration_ratio: float = 0.95
     #: Clearance points: query surface samples whose free space is recorded (the clearance
     #: idea of the authors' later iTClearance work: the query needs room, not an identical
     #: scene-object). 0 disables it (ours).
@@ -103,10 +104,11 @@ class TrainSettings:
     contact_group_points: int = 32
     contact_link: float = 0.03
     #: The contact test stored in the descriptor: ``main`` (the group at the reference
-    #: point), ``all`` groups or ``off``; a group keeps its contact when at least
-    #: ``contact_fraction`` of its points have a scene sample within ``contact_distance`` (m)
-    #: (ours; the paper's examples carry values tuned per affordance).
-    contact_groups: str = "main"
+    #: point), ``all`` groups, ``off``, or ``auto``: all where the example touched in several
+    #: places, else main; a group keeps its contact when at least ``contact_fraction`` of its
+    #: points have a scene sample within ``contact_distance`` (m) (ours; the paper's
+    #: examples carry values tuned per affordance).
+    contact_groups: str = "auto"
     contact_distance: float = 0.02
     contact_fraction: float = 0.25
     #: ... and, below 90, the normal line of that nearest sample within this angle (degrees)
@@ -141,8 +143,8 @@ class TrainSettings:
         _check(0 <= self.interior_limit <= 1, "interior_limit must be in [0, 1]")
         _check(self.contact_group_points >= 1, "contact_group_points must be at least 1")
         _check(self.contact_link > 0, "contact_link must be positive (metres)")
-        _check(self.contact_groups in ("off", "main", "all", "seat"),
-               "contact_groups must be 'off', 'main', 'all' or 'seat'")
+        _check(self.contact_groups in ("off", "main", "all", "seat", "auto"),
+               "contact_groups must be 'off', 'main', 'all', 'seat' or 'auto'")
         _check(self.contact_distance > 0, "contact_distance must be positive (metres)")
         _check(0 <= self.contact_fraction <= 1, "contact_fraction must be in [0, 1]")
         _check(0 < self.contact_angle <= 90, "contact_angle must be in (0, 90] degrees")

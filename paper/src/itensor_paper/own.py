@@ -74,8 +74,8 @@ class OwnExample:
 
 # ------------------------------------------------------------------ query objects
 def book(width: float = 0.16, thickness: float = 0.035, height: float = 0.235) -> Geometry:
-    """A closed hardback book standing upright on z = 0, its spine along -x... its faces
-    facing +-x: ``thickness`` along x, ``width`` along y."""
+    """A closed hardback book standing upright on z = 0, its covers facing +-x:
+    ``thickness`` along x, ``width`` along y, ``height`` up."""
     return _geometry([box((0, 0, height / 2), (thickness, width, height))], "procedural book")
 
 
@@ -530,7 +530,8 @@ def summary_markdown(rows: list[dict]) -> str:
     lines = ["| example | accepted top valid | % | rooms with a place: one found | "
              "rooms with none: nothing accepted |", "|---|---:|---:|---:|---:|"]
     for s in summary(rows):
-        lines.append(f"| {s['example']} | {s['valid']}/{s['accepted']} | {s['precision']} | "
+        pct = "n/a" if not s["accepted"] else s["precision"]
+        lines.append(f"| {s['example']} | {s['valid']}/{s['accepted']} | {pct} | "
                      f"{s['rooms_with_found']}/{s['rooms_with']} | "
                      f"{s['rooms_without_silent']}/{s['rooms_without']} |")
     return "\n".join(lines)

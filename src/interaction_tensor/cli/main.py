@@ -466,8 +466,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "then count it")
     p.add_argument("--acceptance", choices=tuple(affordances.acceptances()), default=None,
                    help="accept as the paper's affordance does (S_aff, clearance, interior and "
-                        "contact tests tuned on validation scenes) instead of 0.9 x the "
-                        "example's own score")
+                        "contact tests tuned on validation scenes) instead of the acceptance "
+                        "derived from the example")
     seed_option(p)
     quiet_option(p)
     p.add_argument("--json", action="store_true",

@@ -19,8 +19,18 @@ from scipy.spatial import cKDTree
 
 from interaction_tensor._version import __version__
 from interaction_tensor.descriptor.bisector import bisector_points, trim_to_sphere
+from interaction_tensor.descriptor.calibration import (
+    CALIBRATION_POINTS,
+    HANGING_BELOW_GROUND,
+    HANGING_PERTURBATIONS,
+    MIN_THRESHOLD,
+    PERTURBATIONS,
+    Perturbation,
+    hangs_from,
+)
 from interaction_tensor.engine.scoring import (
     KeypointTable,
+    keypoint_terms,
     make_table,
     score_pairs,
     surface_vectors,
@@ -51,6 +61,7 @@ from interaction_tensor.settings import (
     CRITERIA,
     KEYPOINT_SETS,
     MIN_SPACING,
+    NORMAL_TOLERANCE_DEG,
     DetectSettings,
     TrainSettings,
 )
@@ -261,7 +272,8 @@ class InteractionTensor:
     scene_points : (S, 3) scene-object samples used for the Voronoi step (subsampled)
     scene_spacing : spacing (m) of the scene-object samples; detection samples at it
     vectors : ``surface`` or ``points``, how provenance (and test) vectors are measured
-    thresholds : calibrated acceptance thresholds, key ``"<criterion>-<keypoint set>"``
+    thresholds : acceptance thresholds, key ``"<criterion>-<keypoint set>"``: derived from
+        the example (:mod:`.calibration`) until :meth:`set_acceptance` sets them
     self_scores : score of the example on a re-sampled scene-object, same keys
     meta : settings, sources, timings, versions
     """
@@ -359,7 +371,7 @@ class InteractionTensor:
         sets the normal filter's tolerance detection uses unless its settings give one
         (:attr:`normal_tolerance`; ``"off"``: the settings' default). ``gaussian_threshold`` sets the
         threshold of the gaussian criterion (both keypoint sets; the default of captured
-        scenes; 0.5, the authors' code's, until set). Arguments left None keep their
+        scenes; derived from the example until set). Arguments left None keep their
         value."""
         if not 0 < threshold <= 1:
             raise ValueError("threshold must be in (0, 1]")
@@ -690,16 +702,21 @@ class InteractionTensor:
             clearance_limit=float(settings.clearance_limit), interior_points=i_pts,
             interior_radius=i_rad, interior_limit=float(settings.interior_limit),
             contact_group_points=g_pts, contact_group_ids=g_ids, contact_group_normals=g_nrm,
-            contact_groups=settings.contact_groups,
+            contact_groups=_contact_mode(settings.contact_groups, g_ids),
             contact_distance=float(settings.contact_distance),
             contact_fraction=float(settings.contact_fraction),
             contact_angle=float(settings.contact_angle), through_section=through,
             ground=ground, collision_tests=_own_collision_tests(query, scene_object, settings))
 
-        # 7. calibration: the example scored against a re-sampled copy of itself ----------
+        # an example hanging from its scene-object asks a new scene to hold it the same way
+        if hangs_from(q_pts, ref, normal, through):
+            tensor.through, tensor.hangs = True, True
+            tensor.below_ground = HANGING_BELOW_GROUND
+
+        # 7. calibration: the example scored on perturbed copies of its scene-object ------
         say("calibration")
         t3 = time.perf_counter()
-        tensor._calibrate(scene_object, settings)
+        copies = tensor._calibrate(scene_object, settings)
         timings["calibration"] = time.perf_counter() - t3
         timings["total"] = time.perf_counter() - t0
         tensor.meta = {
@@ -709,12 +726,17 @@ class InteractionTensor:
             "bisector_points": int(len(bis)), "min_gap": float(gaps.min()),
             "interior_points": int(len(i_pts)),
             "contact_groups": [int(c) for c in np.bincount(g_ids)] if len(g_ids) else [],
+            "calibration": copies,
             "timings_s": {k: round(v, 4) for k, v in timings.items()},
             "created_with": f"interaction-tensor {__version__}",
         }
         return tensor
 
-    def _calibrate(self, scene_object: Geometry, settings: TrainSettings) -> None:
+    def _calibrate(self, scene_object: Geometry, settings: TrainSettings) -> list[dict]:
+        """Set :attr:`self_scores` (the example on a re-sampled copy of its scene-object)
+        and :attr:`thresholds`: ``calibration_ratio`` x the lowest score its interaction gets
+        on :data:`~.calibration.PERTURBATIONS` of the scene-object, the changes a new scene
+        brings (:mod:`.calibration`). Returns each copy's best scores."""
         crop = settings.crop_factor * self.radius
         pts, nrm = _scene_object_samples(scene_object, self.query_centroid, crop,
                                          self.scene_spacing, settings.seed + 101)
@@ -723,16 +745,70 @@ class InteractionTensor:
         k = min(9, len(pts))
         _, near = scene.tree.query(self.reference_point, k=k)
         positions = pts[np.atleast_1d(near)]
-        for criterion in ("paper", "gaussian"):
-            for which in ("weighted", "uniform"):
-                table = self.keypoint_table(DetectSettings(criterion=criterion,
-                                                           keypoints=which))
-                s = score_pairs(positions, np.zeros(len(positions), int), table, scene,
-                                threshold=1.0, vectors=self.vectors, early_exit=False).score
-                key = f"{criterion}-{which}"
-                self.self_scores[key] = float(np.median(s))
-                self.thresholds[key] = (float(settings.calibration_ratio * np.median(s))
-                                        if criterion == "paper" else 0.5)
+        tables = {f"{c}-{w}": self.keypoint_table(DetectSettings(criterion=c, keypoints=w))
+                  for c in CRITERIA for w in KEYPOINT_SETS}
+        for key, table in tables.items():
+            s = score_pairs(positions, np.zeros(len(positions), int), table, scene,
+                            threshold=1.0, vectors=self.vectors, early_exit=False).score
+            self.self_scores[key] = float(np.median(s))
+        # a copy without a test point near the reference point (a peg's top at a coarser
+        # spacing: no sample faces N_aff there) says nothing of the score; the re-sampled
+        # copy of itself always counts
+        lowest = dict(self.self_scores)
+        copies = []
+        for i, perturbation in enumerate(PERTURBATIONS
+                                         + (HANGING_PERTURBATIONS if self.hangs else ())):
+            best = self._perturbed_best(scene_object, perturbation, tables, crop,
+                                        settings.seed + 102 + i)
+            copies.append({"perturbation": perturbation.name,
+                           **{k: (None if v is None else round(v, 4))
+                              for k, v in best.items()}})
+            for key, v in best.items():
+                if v is not None and key.split("-")[0] in perturbation.criteria:
+                    lowest[key] = min(lowest[key], v)
+        for key, low in lowest.items():
+            self.thresholds[key] = float(np.clip(settings.calibration_ratio * low,
+                                                 MIN_THRESHOLD, 1.0))
+        return copies
+
+    def _perturbed_best(self, scene_object: Geometry, perturbation: Perturbation,
+                        tables: dict, crop: float, seed: int) -> dict:
+        """The best score of the example's pose at the test points a detection would have
+        near the reference point (within 3 spacings, a spacing along N_aff, the normal line
+        within 15 degrees of N_aff) on ``perturbation`` of the scene-object, per table; None
+        where there is none."""
+        ref = self.reference_point
+        n = self.affordance_normal / np.linalg.norm(self.affordance_normal)
+        g = perturbation.apply(scene_object, ref, n)
+        spacing = self.scene_spacing * perturbation.spacing
+        pts, nrm = _scene_object_samples(g, self.query_centroid, crop, spacing, seed)
+        if len(pts) == 0:
+            return {key: None for key in tables}
+        if perturbation.noise:
+            pts = pts + np.random.default_rng(seed).normal(0.0, perturbation.noise
+                                                           * self.scene_spacing, pts.shape)
+        scene = Scene(pts, nrm, spacing, "calibration", True)
+        d = np.linalg.norm(pts - ref, axis=1)
+        # on the surface through the reference point (not the board's other side)
+        near = np.flatnonzero((d <= 3 * spacing) & (np.abs((pts - ref) @ n) <= spacing)
+                              & (np.abs(nrm @ n) >= np.cos(np.radians(NORMAL_TOLERANCE_DEG))))
+        if len(near) == 0:
+            return {key: None for key in tables}
+        near = near[np.argsort(d[near])[:CALIBRATION_POINTS]]
+        orient = np.zeros(len(near), int)
+        out, seen = {}, {}
+        for key, table in tables.items():
+            # the criteria of one keypoint set ask the same queries: answered once
+            which = key.split("-", 1)[1]
+            if which not in seen:
+                queries = pts[near][:, None, :] + table.offsets[orient]
+                nn = scene.tree.query(queries.reshape(-1, 3), workers=-1)[1]
+                seen[which] = surface_vectors(queries, scene.points, scene.normals,
+                                              nn.reshape(queries.shape[:2]), scene.spacing,
+                                              self.vectors)
+            terms = keypoint_terms(table, slice(0, table.n), orient, seen[which])
+            out[key] = float(terms.sum(axis=1).max())
+        return out
 
     def keypoint_table(self, settings: DetectSettings) -> KeypointTable:
         """The keypoint set that ``settings`` compares (``keypoints``), relative to the
@@ -1281,6 +1357,16 @@ def _interior_samples(query: Geometry, settings: TrainSettings):
         sure = winding_numbers(inside, query.vertices, faces) > 0.5
         inside, depth = inside[sure], depth[sure]
     return inside, np.minimum(depth, settings.interior_max)
+
+
+def _contact_mode(mode: str, group_ids: np.ndarray) -> str:
+    """The contact test a trained descriptor carries: the settings' ``mode``, ``auto``
+    meaning every contact group when the example touched its scene-object in several places
+    (a person lying on a bench from head to heels: a new place must bear all of it), else
+    the main one."""
+    if mode != "auto":
+        return mode
+    return "all" if len(np.unique(group_ids)) > 1 else "main"
 
 
 def _contact_groups(q_pts, q_gap, q_normal, ground, reference, settings: TrainSettings):

@@ -262,7 +262,8 @@ def score_pairs(points: np.ndarray, orient: np.ndarray, table: KeypointTable, sc
         k = slice(k0, min(k0 + chunk, n))
         kk = k.stop - k.start
         queries = points[alive, None, :] + table.offsets[orient[alive], k]
-        _, nn = scene.tree.query(queries.reshape(-1, 3), workers=-1)
+        q = queries.reshape(-1, 3)
+        _, nn = scene.tree.query(q, workers=_workers(len(q)))
         test_vectors = surface_vectors(queries, scene.points, scene.normals,
                                        nn.reshape(queries.shape[:2]), scene.spacing, vectors)
         terms = keypoint_terms(table, k, orient[alive], test_vectors)
@@ -291,6 +292,15 @@ def score_pairs(points: np.ndarray, orient: np.ndarray, table: KeypointTable, sc
     left = ~decided
     accepted[left] = score[left] >= threshold - eps
     return PairScores(score, accepted, decided_at, comparisons)
+
+
+#: Queries of a cKDTree answered by all cores from this many on: below it, starting the
+#: threads costs more than they save (a descriptor's calibration asks thousands of small ones).
+PARALLEL_QUERIES = 8192
+
+
+def _workers(n: int) -> int:
+    return -1 if n >= PARALLEL_QUERIES else 1
 
 
 def all_terms(points: np.ndarray, orient: np.ndarray, table: KeypointTable, scene,

@@ -99,16 +99,17 @@ def outline(samples: np.ndarray, centre, axis, up, side, nearest: float = 0.0,
 
 
 def opening(samples: np.ndarray, centre, axis, inside: float, slab: float = FIT_SLAB,
-            reach: float = FIT_REACH) -> Opening:
+            reach: float = FIT_REACH, nearest: float | None = None) -> Opening:
     """The :class:`Opening` of radius ``inside`` (m) about ``centre``, in the plane normal
     to ``axis``, of an object with surface ``samples`` (same frame). What passes through it
     may go on past that radius only in the directions where the object does not close round
-    it (its :func:`outline`, from 0.9 of the radius out): a strap's legs and its bag close
-    the sides and below, a hook's wire and the hanger under it close it all round, and only
-    an open hook's gap stays open."""
+    it (its :func:`outline`, from ``nearest`` out; by default 0.9 of the radius): a strap's
+    legs and its bag close the sides and below, a hook's wire and the hanger under it close
+    it all round, and only an open hook's gap stays open."""
     axis, up, side = plane_frame(axis)
     centre = np.asarray(centre, float)
-    closed = outline(samples, centre, axis, up, side, 0.9 * inside, slab, reach)
+    nearest = 0.9 * inside if nearest is None else nearest
+    closed = outline(samples, centre, axis, up, side, nearest, slab, reach)
     return Opening(centre, axis, up, side, float(inside),
                    np.where(np.isfinite(closed), float(inside), np.inf))
 
@@ -118,13 +119,20 @@ def opening_of(samples: np.ndarray, section: np.ndarray) -> Opening | None:
     frame) round the section of what passed through it in the example (``section`` (K, 3),
     the descriptor's ``through_section``: the rail widened by a spacing, which fills a
     hook's opening), or None without a section: centred on the section's centroid, across
-    its plane, as wide as the section."""
+    its plane, as wide as the section. Its outline is followed from 0.9 of the section's
+    radius or of the object's own nearest sample in the plane, whichever is nearer: a towel's
+    fold or a mug's handle is tighter round its bar than the widened section."""
     section = np.asarray(section, float)
     if len(section) < 3 or len(samples) == 0:
         return None
     centre = section.mean(axis=0)
     axis = np.linalg.svd(section - centre, full_matrices=False)[2][-1]
-    return opening(samples, centre, axis, float(np.linalg.norm(section - centre, axis=1).max()))
+    inside = float(np.linalg.norm(section - centre, axis=1).max())
+    d = np.asarray(samples, float) - centre
+    h = d @ axis
+    r = np.sqrt(np.maximum(np.einsum("ij,ij->i", d, d) - h * h, 0.0))[np.abs(h) <= FIT_SLAB]
+    own = float(r.min()) if len(r) else inside
+    return opening(samples, centre, axis, inside, nearest=0.9 * min(inside, own))
 
 
 def fits(opening: Opening, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
