@@ -25,6 +25,7 @@ import numpy as np
 from interaction_tensor import affordances
 from interaction_tensor.affordances.registry import JudgeRule
 from interaction_tensor.examples import shapes
+from interaction_tensor.examples.posing import translated
 from interaction_tensor.examples.shapes import _geometry, ball, box, polyline, revolve, rod
 from interaction_tensor.geometry.core import Geometry
 from itensor_paper.judge import Judge, JudgeSettings
@@ -143,10 +144,6 @@ def lying_human() -> Geometry:
 
 
 # ------------------------------------------------------------------ scene-objects
-def _moved(g: Geometry, t) -> Geometry:
-    return Geometry(g.vertices + np.asarray(t, float), g.faces, source=g.source)
-
-
 def compartment(top: float = 0.42, gap: float = 0.34, width: float = 0.8,
                 depth: float = 0.3) -> Geometry:
     """A bookcase compartment: a board (2 cm) with its top at ``top``, the board above
@@ -212,12 +209,12 @@ def bench_mesh(length: float = 1.9, width: float = 0.5, height: float = 0.45) ->
 # ------------------------------------------------------------------ the examples posed
 def _book_on_shelf():
     top = 0.42
-    return (_moved(book(), (0.0, 0.0, top)), compartment(top), (0.0, 0.0, top), None)
+    return (translated(book(), (0.0, 0.0, top)), compartment(top), (0.0, 0.0, top), None)
 
 
 def _bottle_on_sill():
     top = 0.9
-    return (_moved(shapes.bottle(), (0.0, 0.0, top)), window_with_sill(top), (0.0, 0.0, top),
+    return (translated(shapes.bottle(), (0.0, 0.0, top)), window_with_sill(top), (0.0, 0.0, top),
             None)
 
 
@@ -227,7 +224,7 @@ def _hang_on(query: Geometry, support: Geometry, axis_point, inner: float, top_z
     ax = np.asarray(axis_point, float)
     t = np.array([-ax[0], 0.0, top_z - (ax[2] + inner)])
     loop = (ax + t, inner, np.array([0.0, 1.0, 0.0]))
-    return _moved(query, t), support, (0.0, 0.0, top_z), loop
+    return translated(query, t), support, (0.0, 0.0, top_z), loop
 
 
 def _umbrella_on_rail():
@@ -241,7 +238,7 @@ def _towel_on_bar():
     inner, h, x, r = 0.014, 1.0, 0.06, 0.011
     q, s, p, loop = _hang_on(towel(inner), towel_bar(h, radius=r), (0.0, 0.0, 0.0), inner,
                              h + r)
-    q = _moved(q, (x, 0.0, 0.0))
+    q = translated(q, (x, 0.0, 0.0))
     return q, s, (x, 0.0, h + r), (loop[0] + [x, 0.0, 0.0], inner, loop[2])
 
 
@@ -259,18 +256,22 @@ def _mug_on_hook():
     h, peg = 1.45, 0.005                        # the peg runs along y, 7 cm out of the board
     top = np.array([0.04, 0.0, h + peg])
     t = top - rot @ bar
-    q = Geometry(mug.vertices @ rot.T + t, mug.faces, source="procedural mug")
+    q = mug.transformed(_rigid(rot, t))
     loop = (rot @ centre + t, 0.012, np.array([0.0, 1.0, 0.0]))
-    board = cup_hook_board(h, peg)
     turn = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1.0]])       # its peg along +y
-    b = Geometry(board.vertices @ turn.T + [0.04, -0.05, 0.0], board.faces,
-                 source=board.source)
+    b = cup_hook_board(h, peg).transformed(_rigid(turn, (0.04, -0.05, 0.0)))
     return q, b, top, loop
+
+
+def _rigid(rot, t) -> np.ndarray:
+    m = np.eye(4)
+    m[:3, :3], m[:3, 3] = rot, t
+    return m
 
 
 def _lying_on_bench():
     h = 0.45
-    return (_moved(lying_human(), (0.0, 0.0, h)), bench_mesh(height=h), (0.0, 0.0, h), None)
+    return (translated(lying_human(), (0.0, 0.0, h)), bench_mesh(height=h), (0.0, 0.0, h), None)
 
 
 HANGING_RULE = affordances.get("hanging").judge
@@ -335,7 +336,7 @@ def _wall_piece(name: str, g: Geometry, xy, angle: float = 0.0) -> F.Piece:
 
 
 def _window(xy, angle=0.0, name="window"):
-    return _wall_piece(name, _moved(window_with_sill(), (0.1, 0.0, 0.0)), xy, angle)
+    return _wall_piece(name, translated(window_with_sill(), (0.1, 0.0, 0.0)), xy, angle)
 
 
 def _study():

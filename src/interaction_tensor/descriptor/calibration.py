@@ -26,6 +26,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from interaction_tensor.geometry.core import Geometry
 
@@ -64,18 +65,12 @@ class Perturbation:
         """The scaled and turned scene-object (sampling and noise are the caller's)."""
         if self.scale == 1.0 and self.turn == 0.0:
             return scene_object
-        rot = _rotation(normal, np.radians(self.turn))
+        axis = np.asarray(normal, float) / np.linalg.norm(normal)
+        rot = Rotation.from_rotvec(np.radians(self.turn) * axis).as_matrix()
         v = ((np.asarray(scene_object.vertices, float) - reference) @ rot.T) * self.scale \
             + reference
         normals = None if scene_object.normals is None else scene_object.normals @ rot.T
         return Geometry(v, scene_object.faces, normals=normals, source=scene_object.source)
-
-
-def _rotation(axis, angle: float) -> np.ndarray:
-    """3x3 rotation by ``angle`` (radians) about ``axis`` (Rodrigues)."""
-    a = np.asarray(axis, float) / np.linalg.norm(axis)
-    k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    return np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * (k @ k)
 
 
 #: The copies the thresholds are derived from: two other samplings, a 1.5x and 2x sparser

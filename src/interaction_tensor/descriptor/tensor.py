@@ -32,6 +32,7 @@ from interaction_tensor.engine.scoring import (
     KeypointTable,
     keypoint_terms,
     make_table,
+    pair_test_vectors,
     score_pairs,
     surface_vectors,
 )
@@ -801,11 +802,8 @@ class InteractionTensor:
             # the criteria of one keypoint set ask the same queries: answered once
             which = key.split("-", 1)[1]
             if which not in seen:
-                queries = pts[near][:, None, :] + table.offsets[orient]
-                nn = scene.tree.query(queries.reshape(-1, 3), workers=-1)[1]
-                seen[which] = surface_vectors(queries, scene.points, scene.normals,
-                                              nn.reshape(queries.shape[:2]), scene.spacing,
-                                              self.vectors)
+                seen[which] = pair_test_vectors(pts[near], orient, table, scene, self.vectors,
+                                                lambda q: scene.tree.query(q, workers=-1)[1])
             terms = keypoint_terms(table, slice(0, table.n), orient, seen[which])
             out[key] = float(terms.sum(axis=1).max())
         return out

@@ -295,7 +295,7 @@ def score_pairs(points: np.ndarray, orient: np.ndarray, table: KeypointTable, sc
 
 
 #: Queries of a cKDTree answered by all cores from this many on: below it, starting the
-#: threads costs more than they save (a descriptor's calibration asks thousands of small ones).
+#: threads costs more than they save (a descriptor's self-score, a test's few pairs).
 PARALLEL_QUERIES = 8192
 
 
@@ -303,16 +303,21 @@ def _workers(n: int) -> int:
     return -1 if n >= PARALLEL_QUERIES else 1
 
 
-def all_terms(points: np.ndarray, orient: np.ndarray, table: KeypointTable, scene,
-              vectors: str, nearest) -> np.ndarray:
-    """(P, N) terms of every keypoint of every pair, no early exit.
-
-    ``nearest`` maps (Q, 3) queries to the indices of their nearest scene points.
-    """
+def pair_test_vectors(points: np.ndarray, orient: np.ndarray, table: KeypointTable, scene,
+                      vectors: str, nearest) -> np.ndarray:
+    """(P, N, 3) test vectors of every keypoint of every pair: what both criteria compare
+    (tables of one keypoint set share them). ``nearest`` maps (Q, 3) queries to the indices
+    of their nearest scene points."""
     queries = points[:, None, :] + table.offsets[orient]
     nn = np.asarray(nearest(queries.reshape(-1, 3))).reshape(queries.shape[:2])
-    test_vectors = surface_vectors(queries, scene.points, scene.normals, nn, scene.spacing,
-                                   vectors)
+    return surface_vectors(queries, scene.points, scene.normals, nn, scene.spacing, vectors)
+
+
+def all_terms(points: np.ndarray, orient: np.ndarray, table: KeypointTable, scene,
+              vectors: str, nearest) -> np.ndarray:
+    """(P, N) terms of every keypoint of every pair, no early exit (:func:`pair_test_vectors`
+    compared by ``table``'s criterion)."""
+    test_vectors = pair_test_vectors(points, orient, table, scene, vectors, nearest)
     return keypoint_terms(table, slice(0, table.n), orient, test_vectors)
 
 
