@@ -129,3 +129,37 @@ def test_a_hanging_example_is_also_calibrated_on_its_support_turned(hanger, bott
     c, s = np.cos(np.radians(22.5)), np.sin(np.radians(22.5))
     np.testing.assert_allclose((moved - ref)[:, :2], (v - ref)[:, :2] @ np.array([[c, s], [-s, c]]),
                                atol=1e-12)
+
+
+def _bar_with_brackets(length=0.6):
+    """A 2 cm bar along y at 1 m between two end posts rising 6 cm above it, and a 50 cm
+    block resting on it between them (4 cm clear of each post)."""
+    bar = shapes.rod((0.0, -length / 2, 1.0), (0.0, length / 2, 1.0), 0.01, 24)
+    parts = [bar] + [shapes.box((0.0, s * (length / 2 + 0.01), 1.0), (0.04, 0.02, 0.12))
+                     for s in (-1, 1)]
+    support = shapes._geometry(parts, "bar")
+    block = shapes._geometry([shapes.box((0.0, 0.0, 1.035), (0.06, 0.5, 0.05))], "block")
+    return block, support
+
+
+def test_a_copy_on_which_the_example_no_longer_holds_does_not_count():
+    block, support = _bar_with_brackets()
+    ref = np.array([0.0, 0.0, 1.01])
+    smaller = Perturbation("smaller", scale=0.8).apply(support, ref, (0, 0, 1))
+    larger = Perturbation("larger", scale=1.25).apply(support, ref, (0, 0, 1))
+    # 20 % smaller, the brackets come through the block; 25 % larger, they move away
+    assert not calibration.still_holds(block, support, smaller, 0.01)
+    assert calibration.still_holds(block, support, larger, 0.01)
+    assert calibration.still_holds(block, support, support, 0.01)
+    # a point cloud has no triangles to tell: its copies count
+    cloud = Geometry(smaller.vertices, np.zeros((0, 3), np.int64))
+    assert calibration.still_holds(block, support, cloud, 0.01)
+    tensor = it.train(block, support, affordance="block-on-bar")
+    copies = {c["perturbation"]: c for c in tensor.meta["calibration"]}
+    assert copies["smaller"]["holds"] is False and copies["larger"]["holds"] is True
+    assert all(v is None for k, v in copies["smaller"].items() if "-" in k)
+    low = min(c["paper-weighted"] for c in copies.values()
+              if c["holds"] and c["paper-weighted"] is not None)
+    low = min(low, tensor.self_scores["paper-weighted"])
+    assert tensor.thresholds["paper-weighted"] == pytest.approx(
+        max(it.TrainSettings().calibration_ratio * low, calibration.MIN_THRESHOLD), abs=1e-4)

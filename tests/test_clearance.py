@@ -156,7 +156,7 @@ def test_rank_pairs_reaches_placed_pairs_below_many_better_scored_failures(bowl)
     assert best_ok.all() and np.allclose(best_s, full[exact])
 
 
-@pytest.mark.parametrize("threshold", [0.3, 0.6])
+@pytest.mark.parametrize("threshold", [0.5, 0.7])
 def test_testing_first_changes_only_the_work(bowl, threshold):
     """Detection (tests first) gives every pair the placement tests and
     scores only those that pass: the same final decisions, accepted scores bit for bit,

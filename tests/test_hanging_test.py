@@ -51,8 +51,12 @@ def test_the_opening_is_the_hook_round_the_rail(hanging):
     assert abs(op.centre[2] - (rail_top - 0.0125)) < 0.0125
     assert op.inside == pytest.approx(shapes.HOOK_INNER, abs=0.005)
     # the wire over the rail and the hanger below close it all round: what passes through
-    # may not go on past the opening in any direction
-    assert (op.limit == op.inside).all()
+    # may not go on past the opening in any direction, nor past the hook's own wire where
+    # that is nearer (a few millimetres nearer in a few directions)
+    assert np.isfinite(op.limit).all() and (op.limit <= op.inside).all()
+    assert (op.limit > 0.9 * op.inside).all()
+    loose = hooks.opening(tensor._hook_samples(), op.centre, op.axis, op.inside)
+    assert (loose.limit == op.inside).all()
     # a descriptor that does not ask for the test has none
     bare = affordances.build_descriptor("hanging-hanger", example=ex)
     bare.set_acceptance(bare.threshold(), hangs=False)
@@ -117,6 +121,13 @@ def test_detection_keeps_the_rail_and_drops_hooks_on_a_corner_or_a_wall_s_end(ha
     assert failed.any() and not det.pairs.accepted[failed].any()
     assert len(det.accepted_place) == len(det.accepted)
     assert (det.accepted_place >= 0).all()
+    # a place whose pairs all failed is no place found: every place keeps an accepted pair,
+    # and its best score is its best accepted pair's
+    assert (np.bincount(det.accepted_place, minlength=len(det.places)) > 0).all()
+    for place in det.places:
+        mine = det.accepted[det.accepted_place == place.index]
+        assert place.score == pytest.approx(det.pairs.score[mine].max())
+        assert place.pairs == len(mine)
     for place in range(len(det.places)):
         assert all(p.place == place for p in det.place_predictions(place, limit=5))
 
@@ -145,3 +156,76 @@ def test_the_cli_skips_the_test():
     assert not _detect_settings(args).runs("hangs")
     args = build_parser().parse_args(["detect", "s.ply", "d.npz", "-o", "out"])
     assert _detect_settings(args).runs("hangs")
+
+
+def _sections(parts):
+    from interaction_tensor.geometry.sections import MeshSections
+
+    g = parts_mesh(parts)
+    return MeshSections(g.vertices, g.faces)
+
+
+def test_a_plane_cuts_a_box_along_its_outline():
+    cut = _sections([box_part("b", (0.0, 0.0, 0.5), (0.4, 0.2, 0.1))])
+    seg = cut.segments((0.0, 0.0, 0.5), (0.0, 1.0, 0.0), reach=1.0)
+    pts = seg.reshape(-1, 3)
+    np.testing.assert_allclose(pts[:, 1], 0.0, atol=1e-12)          # in the plane
+    # on the box's outline: |x| = 0.2 or |z - 0.5| = 0.05, within the box
+    edge = np.isclose(np.abs(pts[:, 0]), 0.2) | np.isclose(np.abs(pts[:, 2] - 0.5), 0.05)
+    assert edge.all() and (np.abs(pts[:, 0]) <= 0.2 + 1e-12).all()
+    assert np.linalg.norm(seg[:, 1] - seg[:, 0], axis=1).sum() == pytest.approx(2 * (0.4 + 0.1))
+    along = cut.points((0.0, 0.0, 0.5), (0.0, 1.0, 0.0), reach=1.0, step=0.002)
+    assert len(along) >= 1.0 / 0.002
+    # within reach only, and nothing where the plane misses the box
+    near = cut.points((0.0, 0.0, 0.5), (0.0, 1.0, 0.0), reach=0.1, step=0.002)
+    assert len(near) and (np.linalg.norm(near - [0.0, 0.0, 0.5], axis=1) <= 0.1 + 1e-12).all()
+    assert not len(cut.segments((0.0, 0.5, 0.5), (0.0, 1.0, 0.0), reach=1.0))
+
+
+def test_on_a_mesh_a_thick_top_under_the_hook_does_not_fit_however_it_was_sampled(hanging):
+    """A 10 cm wall's top under the hook: its samples in a thin slab leave gaps of several
+    centimetres, where it looks like a rod; the mesh's exact cut does not."""
+    ex, tensor = hanging
+    op = tensor.hook_opening()
+    rot, t = np.eye(3), np.zeros(3)
+    # the wall along the rail, its top inside the hook's opening: its section is a 10 cm
+    # wide slab's end
+    top = float(op.centre[2] + 0.5 * op.inside)
+    wall = [box_part("wall", (0.0, 0.0, top - 0.5), (0.1, 2.0, 1.0))]
+    cut = _sections(wall)
+    scene = it.prepare_scene(parts_mesh(wall), 0.01, seed=0)
+    assert not hooks.fits(op, rot, t, scene.points, scene.tree, scene.spacing, sections=cut)
+    # the rail itself fits, cut exactly as sampled
+    rail = it.prepare_scene(ex.scene_object, 0.01, seed=0)
+    assert hooks.fits(op, rot, t, rail.points, rail.tree, rail.spacing,
+                      sections=rail.sections())
+    # nothing crossing the plane near the hook: nothing to fit
+    far = _sections([box_part("far", (3.0, 0.0, top - 0.5), (0.1, 2.0, 1.0))])
+    assert hooks.fits(op, rot, t, scene.points + 3.0, None, 0.01, sections=far)
+
+
+def test_a_fold_round_its_bar_is_tight_and_a_bar_under_the_cloth_does_not_fit():
+    """A towel's fold hugs its bar closer than the bar's section widened by a spacing: the
+    bar held up against the cloth from inside (the towel hung from the bar's underside)
+    goes on past the fold."""
+    r, inner, cloth = 0.011, 0.014, 0.004
+    ang = np.linspace(0.0, np.pi, 24)
+    arc = np.c_[(inner + cloth / 2) * np.cos(ang), np.zeros_like(ang),
+                (inner + cloth / 2) * np.sin(ang) - (inner - r)]
+    sheets = [np.c_[np.full(40, sx * (inner + cloth / 2)), np.zeros(40),
+                    np.linspace(-0.3, -(inner - r), 40)] for sx in (-1, 1)]
+    fold = np.vstack([arc] + sheets)
+    fold = np.vstack([fold + [0.0, y, 0.0] for y in np.linspace(-0.01, 0.01, 5)])
+    section = np.c_[(r + 0.01) * np.cos(np.linspace(0, 2 * np.pi, 24, endpoint=False)),
+                    np.zeros(24), (r + 0.01) * np.sin(np.linspace(0, 2 * np.pi, 24,
+                                                                  endpoint=False))]
+    op = hooks.opening_of(fold, section)
+    assert op is not None and np.isfinite(op.limit).any()
+    assert op.limit[np.isfinite(op.limit)].min() < op.inside - 0.005
+    bar = [box_part("bar", (0.0, 0.0, 0.0), (0.02, 0.6, 0.02))]
+    cut, scene = _sections(bar), it.prepare_scene(parts_mesh(bar), 0.005, seed=0)
+    rot = np.eye(3)
+    assert hooks.fits(op, rot, np.zeros(3), scene.points, scene.tree, scene.spacing,
+                      sections=cut)
+    low = np.array([0.0, 0.0, -2 * r])                 # the fold 2.2 cm down: the bar in it
+    assert not hooks.fits(op, rot, low, scene.points, scene.tree, scene.spacing, sections=cut)

@@ -60,3 +60,15 @@ def test_summary_counts_rooms_and_precision():
     assert (s["rooms_with_found"], s["rooms_with"]) == (1, 2)
     assert (s["rooms_without_silent"], s["rooms_without"]) == (1, 2)
     assert "| a | 3/7 | 42.9 | 1/2 | 1/2 |" in own.summary_markdown(rows)
+
+
+def test_the_rooms_cup_hooks_are_the_examples_board_on_the_wall():
+    """The board stands 2 cm proud of the room's wall, as in the example, so that the mug
+    hangs there as it hangs in the example."""
+    _, s, _, _ = own.example("mug-hook").build()
+    board_face = float(s.vertices[:, 1][np.isclose(s.vertices[:, 2], 1.49)].max())
+    peg_tip = float(s.vertices[:, 1].max())
+    v = own.build_room("kitchen").geometry.vertices
+    near = v[(np.abs(v[:, 0] - 2.4) < 0.16) & (np.abs(v[:, 2] - 1.45) < 0.05)]
+    assert near[:, 1].max() == pytest.approx(0.02 + (peg_tip - board_face), abs=0.006)
+    assert np.isclose(near[:, 1], 0.02).sum() >= 4              # the board's face

@@ -184,9 +184,10 @@ def towel_bar(height: float = 1.0, length: float = 0.6, radius: float = 0.011,
     return _geometry(parts, "procedural towel bar")
 
 
-def cup_hook_board(height: float = 1.45, peg: float = 0.005, length: float = 0.06) -> Geometry:
-    """A board (face at x = 0) on a wall from the floor, with one cup hook along +x at
-    ``height``: a peg of radius ``peg`` ``length`` long with an upturned tip."""
+def cup_hook_board(height: float = 1.45, peg: float = 0.005, length: float = 0.09) -> Geometry:
+    """A board 2 cm proud of a wall (the board's face at x = 0, the wall's at x = -0.02,
+    from the floor), with one cup hook along +x at ``height``: a peg of radius ``peg``
+    ``length`` long with an upturned tip."""
     tip = length + 0.01
     parts = [box((-0.01, 0, height), (0.02, 0.3, 0.08)),
              box((-0.06, 0, (height + 0.3) / 2), (0.08, 0.6, height + 0.3)),
@@ -243,8 +244,9 @@ def _towel_on_bar():
 
 
 def _mug_on_hook():
-    """The mug hung by the inside of its handle's outer bar on the hook's peg, turned about
-    y until its centre of mass hangs under that point (the lowest it can hang)."""
+    """The mug hung by the inside of its handle's outer bar on the hook's peg 8 cm out from
+    the board, turned about y until its centre of mass hangs under that point (the lowest
+    it can hang), its body 4 cm clear of the board."""
     mug = shapes.mug()
     bar = np.array([0.0675, 0.0, 0.046])        # the inside of the handle's outer bar
     centre = np.array([0.054, 0.0, 0.046])      # the handle opening's centre
@@ -253,13 +255,13 @@ def _mug_on_hook():
     a = math.atan2(d[0], -d[2])                 # turns d onto -z about y
     c, s = math.cos(a), math.sin(a)
     rot = np.array([[c, 0, s], [0, 1, 0], [-s, 0, c]])
-    h, peg = 1.45, 0.005                        # the peg runs along y, 7 cm out of the board
+    h, peg = 1.45, 0.005                        # the peg runs along y, 9 cm out of the board
     top = np.array([0.04, 0.0, h + peg])
     t = top - rot @ bar
     q = mug.transformed(_rigid(rot, t))
     loop = (rot @ centre + t, 0.012, np.array([0.0, 1.0, 0.0]))
     turn = np.array([[0, -1, 0], [1, 0, 0], [0, 0, 1.0]])       # its peg along +y
-    b = cup_hook_board(h, peg).transformed(_rigid(turn, (0.04, -0.05, 0.0)))
+    b = cup_hook_board(h, peg).transformed(_rigid(turn, (0.04, -0.08, 0.0)))
     return q, b, top, loop
 
 
@@ -335,6 +337,11 @@ def _wall_piece(name: str, g: Geometry, xy, angle: float = 0.0) -> F.Piece:
     return k.piece(name, xy, angle, wall_mounted=True)
 
 
+def _hook_board(name, xy, angle=0.0):
+    """The example's cup hook board on a room's wall: its own wall face on the room's."""
+    return _wall_piece(name, translated(cup_hook_board(1.45), (0.02, 0.0, 0.0)), xy, angle)
+
+
 def _window(xy, angle=0.0, name="window"):
     return _wall_piece(name, translated(window_with_sill(), (0.1, 0.0, 0.0)), xy, angle)
 
@@ -366,7 +373,7 @@ def _hall():
         F.coat_pegs((0.0, 1.0), 0, height=1.7, count=4, name="coat pegs"),
         F.clothes_rail((2.6, 2.4), 90, height=1.5, length=1.0, radius=0.015, name="rail"),
         _wall_piece("towel bar", towel_bar(1.0), (0.0, 2.6)),
-        _wall_piece("cup hooks", cup_hook_board(1.45), (1.6, 0.0), 90),
+        _hook_board("cup hooks", (1.6, 0.0), 90),
         F.bench((2.0, 0.4), 0, length=1.2, depth=0.35, name="bench"),
     ]
 
@@ -384,8 +391,8 @@ def _kitchen():
     return room((4.0, 4.0)), [
         F.kitchen_counter((0.0, 1.8), 0, length=2.4, sinks=(), wall_cabinet=(0.1, 1.25),
                           name="counter"),
-        _wall_piece("cup hook 1", cup_hook_board(1.45), (2.4, 0.0), 90),
-        _wall_piece("cup hook 2", cup_hook_board(1.45), (2.8, 0.0), 90),
+        _hook_board("cup hook 1", (2.4, 0.0), 90),
+        _hook_board("cup hook 2", (2.8, 0.0), 90),
         F.dining_table((2.8, 2.8), 0, name="dining table"),
         F.dining_chair((2.4, 2.05), 90, name="chair"),
     ]

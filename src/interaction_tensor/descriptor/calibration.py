@@ -7,7 +7,10 @@ No one tuned an acceptance for a user's own pair, so training derives it from th
   sensor noise, another size; for a hanging example, a rail crossing the hook at an angle).
   On each copy the example's pose is scored at the test points detection would have near
   the reference point; the threshold is ``calibration_ratio`` x the lowest of the copies'
-  best scores, so that every such place would pass.
+  best scores, so that every such place would pass. A copy counts only where the example's
+  pose is still the interaction on it (:func:`still_holds`): a towel over a bar 20 %
+  shorter than itself has the bar's brackets through its cloth, and over a bar turned
+  under it the bar through both its sheets, so neither is a place to find.
 - **The contact test** of every place the example touched, where it touched in several (a
   person lying from head to heels; ``TrainSettings.contact_groups = "auto"``).
 - **The hanging tests** when the example hangs (:func:`hangs_from`): the query's mass lies
@@ -28,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from interaction_tensor.geometry.collision import Body, MeshCollider
 from interaction_tensor.geometry.core import Geometry
 
 #: Test points scored per perturbed copy: the nearest to the reference point.
@@ -91,6 +95,21 @@ PERTURBATIONS = (
 #: And for an example that hangs: a hook hangs from a rail crossing it at an angle, so the
 #: rail turned by half of detection's 45-degree orientation step is a right place too.
 HANGING_PERTURBATIONS = (Perturbation("turned", turn=22.5),)
+
+
+def still_holds(query: Geometry, scene_object: Geometry, copy: Geometry,
+                depth: float) -> bool:
+    """Whether the example's query, as posed, is still the interaction on a perturbed
+    ``copy`` of its ``scene_object``: it lies no deeper in the copy than ``depth`` (m) or
+    than in the scene-object itself, whichever is deeper (the shortest freeing move,
+    :meth:`~interaction_tensor.geometry.collision.MeshCollider.separation`). Meshes only:
+    a point cloud on either side has no triangles to test, and its copies all count."""
+    if copy is scene_object or not (query.is_mesh and copy.is_mesh):
+        return True
+    body = Body(query.vertices, query.faces)
+    own = MeshCollider(scene_object.vertices, scene_object.faces).separation(body, np.eye(4))
+    allowed = max(float(depth), own)
+    return not MeshCollider(copy.vertices, copy.faces).penetrates(body, np.eye(4), allowed)[0]
 
 
 def hangs_from(query_points: np.ndarray, reference_point, normal,

@@ -27,6 +27,7 @@ from interaction_tensor.descriptor.calibration import (
     PERTURBATIONS,
     Perturbation,
     hangs_from,
+    still_holds,
 )
 from interaction_tensor.engine.scoring import (
     KeypointTable,
@@ -717,7 +718,7 @@ class InteractionTensor:
         # 7. calibration: the example scored on perturbed copies of its scene-object ------
         say("calibration")
         t3 = time.perf_counter()
-        copies = tensor._calibrate(scene_object, settings)
+        copies = tensor._calibrate(query, scene_object, settings)
         timings["calibration"] = time.perf_counter() - t3
         timings["total"] = time.perf_counter() - t0
         tensor.meta = {
@@ -733,11 +734,14 @@ class InteractionTensor:
         }
         return tensor
 
-    def _calibrate(self, scene_object: Geometry, settings: TrainSettings) -> list[dict]:
+    def _calibrate(self, query: Geometry, scene_object: Geometry,
+                   settings: TrainSettings) -> list[dict]:
         """Set :attr:`self_scores` (the example on a re-sampled copy of its scene-object)
         and :attr:`thresholds`: ``calibration_ratio`` x the lowest score its interaction gets
         on :data:`~.calibration.PERTURBATIONS` of the scene-object, the changes a new scene
-        brings (:mod:`.calibration`). Returns each copy's best scores."""
+        brings (:mod:`.calibration`), of those on which the example's pose still holds
+        (:func:`~.calibration.still_holds`). Returns each copy's best scores (None where
+        it had no test point or does not hold: ``holds`` says which)."""
         crop = settings.crop_factor * self.radius
         pts, nrm = _scene_object_samples(scene_object, self.query_centroid, crop,
                                          self.scene_spacing, settings.seed + 101)
@@ -759,9 +763,13 @@ class InteractionTensor:
         copies = []
         for i, perturbation in enumerate(PERTURBATIONS
                                          + (HANGING_PERTURBATIONS if self.hangs else ())):
-            best = self._perturbed_best(scene_object, perturbation, tables, crop,
-                                        settings.seed + 102 + i)
-            copies.append({"perturbation": perturbation.name,
+            copy = perturbation.apply(scene_object, self.reference_point,
+                                      self.affordance_normal)
+            holds = still_holds(query, scene_object, copy, settings.collision_depth or 0.0)
+            best = (self._perturbed_best(copy, perturbation, tables, crop,
+                                         settings.seed + 102 + i) if holds
+                    else {key: None for key in tables})
+            copies.append({"perturbation": perturbation.name, "holds": bool(holds),
                            **{k: (None if v is None else round(v, 4))
                               for k, v in best.items()}})
             for key, v in best.items():
@@ -772,15 +780,15 @@ class InteractionTensor:
                                                  MIN_THRESHOLD, 1.0))
         return copies
 
-    def _perturbed_best(self, scene_object: Geometry, perturbation: Perturbation,
+    def _perturbed_best(self, g: Geometry, perturbation: Perturbation,
                         tables: dict, crop: float, seed: int) -> dict:
         """The best score of the example's pose at the test points a detection would have
         near the reference point (within 3 spacings, a spacing along N_aff, the normal line
-        within 15 degrees of N_aff) on ``perturbation`` of the scene-object, per table; None
-        where there is none."""
+        within 15 degrees of N_aff) on ``g``, the scene-object scaled and turned by
+        ``perturbation`` (its sampling and noise applied here), per table; None where there
+        is none."""
         ref = self.reference_point
         n = self.affordance_normal / np.linalg.norm(self.affordance_normal)
-        g = perturbation.apply(scene_object, ref, n)
         spacing = self.scene_spacing * perturbation.spacing
         pts, nrm = _scene_object_samples(g, self.query_centroid, crop, spacing, seed)
         if len(pts) == 0:

@@ -127,11 +127,12 @@ class CollisionCheck:
 
     def _hangs(self, pose: np.ndarray) -> bool:
         """Whether the query posed by ``pose`` hangs from what crosses its opening:
-        :func:`.hooks.fits` and :func:`.hooks.hangs_free`."""
+        :func:`.hooks.fits` (on the mesh's exact section where the scene has triangles) and
+        :func:`.hooks.hangs_free`."""
         scene, tensor = self.det.scene, self.det.tensor
         rot, t = pose[:3, :3], pose[:3, 3]
         if not hooks.fits(tensor.hook_opening(), rot, t, scene.points, scene.tree,
-                          scene.spacing):
+                          scene.spacing, sections=scene.sections()):
             return False
         if self._flats is None:
             self._flats = hooks.flat_tree(scene.points, scene.normals)

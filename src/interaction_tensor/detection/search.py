@@ -107,11 +107,13 @@ def score_at(tensor: InteractionTensor, scene: Scene, positions, orientation_ind
 
 
 def candidate_mask(normals: np.ndarray, affordance_normal: np.ndarray,
-                   tolerance_deg: float, oriented: bool) -> np.ndarray:
-    """(N,) bool: normals within ``tolerance_deg`` of N_aff (of its line unless oriented)."""
+                   tolerance_deg: float, oriented) -> np.ndarray:
+    """(N,) bool: normals within ``tolerance_deg`` of N_aff, of its line where the normal's
+    side is not known: ``oriented`` True (every normal's side is known), False (none is) or
+    (N,) bool, per normal (a closed part's outside, :attr:`~.geometry.scene.Scene.oriented`:
+    the underside of a shelf or of a peg does not face up)."""
     dot = normals @ np.asarray(affordance_normal, float)
-    if not oriented:
-        dot = np.abs(dot)
+    dot = np.where(oriented, dot, np.abs(dot))
     return dot >= np.cos(np.radians(tolerance_deg)) - 1e-12
 
 
@@ -157,15 +159,21 @@ def _finish(scene, tensor, settings, engine, threshold, test_idx, cand, pair_poi
     if engine.rank:
         # accepted pairs grouped into places; the top k: the best pose of each of the best
         # places (one that passes the collision test); every accepted pair has a place, so
-        # no radius parts them
+        # no radius parts them. A pair that fails the ranked tests loses its acceptance:
+        # the places are grouped again without it (a place whose pairs all failed is no
+        # place found) until a ranking fails none (the tested pairs keep their outcome)
         cell = place_cell(scene.spacing, settings.sample_fraction, tensor.scene_spacing)
-        place, det.places = group_places(scene.points, pair_point, pairs.score, acc, cell,
-                                         tensor.affordance_normal)
+        while True:
+            acc = accepted_indices(pairs.accepted)
+            place, det.places = group_places(scene.points, pair_point, pairs.score, acc,
+                                             cell, tensor.affordance_normal)
+            picks = top_k(scene.points, pairs.score[acc], settings.top_k, 0.0,
+                          index=pair_point[acc], group=place,
+                          accept=(lambda i: check.free(int(acc[i]))) if check.on else None)
+            if pairs.accepted[acc].all():
+                break
         det.pair_place = np.full(len(pair_point), -1, np.int32)
         det.pair_place[acc] = place
-        picks = top_k(scene.points, pairs.score[acc], settings.top_k, 0.0,
-                      index=pair_point[acc], group=place,
-                      accept=(lambda i: check.free(int(acc[i]))) if check.on else None)
         det.predictions = [det.prediction(int(acc[i]), int(place[i])) for i in picks]
     timings["collision"] = check.seconds
     det.heat, det.accepted_count = heat_map(scene, pair_point, pairs.score, pairs.accepted)
@@ -284,8 +292,11 @@ def empty_result_warnings(det) -> list:
 
 def _filtered(scene: Scene, tensor, settings: DetectSettings, test_idx) -> np.ndarray:
     """The test points whose normal passes the tensor's N_aff filter."""
+    oriented = settings.oriented_normals
+    if not oriented and scene.oriented is not None:
+        oriented = scene.oriented[test_idx]
     ok = candidate_mask(scene.normals[test_idx], tensor.affordance_normal,
-                        settings.normal_tolerance(tensor), settings.oriented_normals)
+                        settings.normal_tolerance(tensor), oriented)
     return test_idx[ok]
 
 

@@ -55,37 +55,65 @@ def sample_mesh(geometry: Geometry, count: int, seed, face_mask=None, with_faces
 BURIED_LIFT = 1e-3
 
 
+class MeshParts:
+    """A mesh's parts, worked out once: its vertices merged (shared corners join faces,
+    trimesh's ``merge_vertices``; the faces keep their order), its parts (connected sets of
+    faces), which of them are closed (every edge used by exactly two of the part's faces)
+    and which of those are wound consistently (each edge walked once each way).
+
+    Attributes
+    ----------
+    mesh : the merged ``trimesh.Trimesh``
+    part : (F,) int64 part of each face; n_parts : int
+    closed : (n_parts,) bool; consistent : (n_parts,) bool (closed and consistent)
+    """
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+        import trimesh
+
+        faces = np.asarray(faces, np.int64)
+        mesh = trimesh.Trimesh(np.asarray(vertices, np.float64), faces, process=False)
+        mesh.merge_vertices()
+        self.mesh = mesh
+        merged = np.asarray(mesh.faces)
+        n = len(merged)
+        adj = np.asarray(mesh.face_adjacency).reshape(-1, 2)
+        graph = coo_matrix((np.ones(len(adj), np.int8), (adj[:, 0], adj[:, 1])), shape=(n, n))
+        self.n_parts, part = connected_components(graph, directed=False)
+        self.part = part.astype(np.int64)
+        # one int64 key per (part, edge): the part, then the edge's two vertices
+        nv = max(len(mesh.vertices), 1)
+        directed = merged[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+        edge_part = np.repeat(self.part, 3)
+        key = (edge_part * nv + directed.min(axis=1)) * nv + directed.max(axis=1)
+        _, inv, counts = np.unique(key, return_inverse=True, return_counts=True)
+        self.closed = np.ones(self.n_parts, bool)
+        self.closed[edge_part[counts[inv.reshape(-1)] != 2]] = False
+        walked, w_counts = np.unique((edge_part * nv + directed[:, 0]) * nv + directed[:, 1],
+                                     return_counts=True)
+        self.consistent = self.closed.copy()
+        self.consistent[walked[w_counts > 1] // nv // nv] = False
+
+
 def buried_samples(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
-                   normals: np.ndarray, face_index: np.ndarray) -> np.ndarray:
+                   normals: np.ndarray, face_index: np.ndarray,
+                   parts: "MeshParts | None" = None) -> np.ndarray:
     """(N,) bool: the samples of a mesh that lie inside a closed part of it other than their
     own (a table top under a box standing on it, a floor under a wardrobe): no object can
-    reach them. A part is a connected set of faces whose every edge two of its faces share;
-    a sample inside one (generalised winding number of the part at the sample lifted by
-    :data:`BURIED_LIFT` along its normal, at least 0.5 in magnitude) is buried. Open parts (a
-    scanned room's single surface) bury nothing. Only the samples inside a part's bounding
-    box are tested."""
-    import trimesh
-
+    reach them. A part is a connected set of faces whose every edge two of its faces share
+    (:class:`MeshParts`, worked out here unless given); a sample inside one (generalised
+    winding number of the part at the sample lifted by :data:`BURIED_LIFT` along its
+    normal, at least 0.5 in magnitude) is buried. Open parts (a scanned room's single
+    surface) bury nothing. Only the samples inside a part's bounding box are tested."""
     faces = np.asarray(faces, np.int64)
     buried = np.zeros(len(points), bool)
     if len(faces) < 8:
         return buried
-    mesh = trimesh.Trimesh(np.asarray(vertices, np.float64), faces, process=False)
-    mesh.merge_vertices()                                 # shared corners join faces
-    merged = np.asarray(mesh.faces)
-    adj = np.asarray(mesh.face_adjacency)
-    graph = coo_matrix((np.ones(len(adj), np.int8), (adj[:, 0], adj[:, 1])),
-                       shape=(len(merged), len(merged)))
-    n_parts, part = connected_components(graph, directed=False)
+    parts = parts or MeshParts(vertices, faces)
+    mesh, part, n_parts = parts.mesh, parts.part, parts.n_parts
     if n_parts < 2:
         return buried
-    # closed parts: every edge of the part used by exactly two of its faces
-    edges = np.sort(merged[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    edge_part = np.repeat(part, 3)
-    key = np.column_stack([edge_part, edges])
-    uniq, counts = np.unique(key, axis=0, return_counts=True)
-    open_part = np.zeros(n_parts, bool)
-    open_part[uniq[counts != 2, 0]] = True
+    merged = np.asarray(mesh.faces)
     size = np.bincount(part, minlength=n_parts)
     tri = np.asarray(mesh.vertices)[merged]
     lo = np.full((n_parts, 3), np.inf)
@@ -97,7 +125,7 @@ def buried_samples(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
     tree = cKDTree(lifted)
     by_part = np.argsort(part, kind="stable")                   # each part's faces, sliced
     start = np.concatenate([[0], np.cumsum(size)])
-    for c in np.flatnonzero(~open_part & (size >= 4)):          # closed parts, one at a time
+    for c in np.flatnonzero(parts.closed & (size >= 4)):        # closed parts, one at a time
         centre, reach = (lo[c] + hi[c]) / 2, np.linalg.norm(hi[c] - lo[c]) / 2
         near = np.asarray(tree.query_ball_point(centre, reach), np.int64)
         if not len(near):
@@ -109,6 +137,98 @@ def buried_samples(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
                                 merged[by_part[start[c]:start[c + 1]]])
             buried[near[np.abs(w) >= 0.5]] = True
     return buried
+
+
+def outward_faces(vertices: np.ndarray, faces: np.ndarray,
+                  parts: "MeshParts | None" = None) -> np.ndarray:
+    """(F,) int8: +1 where a face's normal (by its winding) points out of the closed part it
+    belongs to, -1 where it points in, 0 where the mesh does not say (an open part: a CAD
+    model's single surface, a scanned room; or a closed part whose faces are not wound
+    consistently: :class:`MeshParts`, worked out here unless given). The sign of a
+    consistently wound closed part's volume (the sum of its faces' signed tetrahedra) says
+    whether its faces turn out or in."""
+    faces = np.asarray(faces, np.int64)
+    if len(faces) < 4:
+        return np.zeros(len(faces), np.int8)
+    parts = parts or MeshParts(vertices, faces)
+    tri = np.asarray(parts.mesh.vertices)[np.asarray(parts.mesh.faces)]
+    volume = np.einsum("ij,ij->i", tri[:, 0], np.cross(tri[:, 1], tri[:, 2]))
+    part_volume = np.bincount(parts.part, weights=volume, minlength=parts.n_parts)
+    sign = np.where(~parts.consistent | (np.abs(part_volume) <= 1e-15), 0,
+                    np.sign(part_volume))
+    return sign[parts.part].astype(np.int8)
+
+
+#: A face is part of a surface curved tighter than the sampling spacing when a long edge of
+#: it bends to its neighbour by at least this (radians) and by less than
+#: :data:`CREST_MAX_BEND` (a crease, a box's edge, is not a curve).
+CREST_MIN_BEND = 1e-3
+CREST_MAX_BEND = np.radians(60.0)
+#: ... and it lies within this (degrees) of level (a peg's or a rail's top or underside,
+#: where an interaction along N_aff up or down rests).
+CREST_LEVEL_DEG = 30.0
+#: Such faces get a sample every this many spacings of their length.
+CREST_STEP = 0.25
+
+
+def crest_faces(vertices: np.ndarray, faces: np.ndarray, spacing: float,
+                parts: "MeshParts | None" = None) -> np.ndarray:
+    """(F,) bool: the faces of surfaces curved tighter than ``spacing`` (a peg, a hook, a thin
+    rod: a radius under the spacing), near level. Area-uniform sampling at ``spacing`` gives
+    a 5 mm peg's top one sample in several centimetres, so the few places along it where
+    something can hang are missed. A face qualifies when it is narrower than half the
+    spacing (twice its area over its longest edge), one of its long edges (at least half
+    its longest) bends to the neighbouring face by an angle ``a`` between
+    :data:`CREST_MIN_BEND` and :data:`CREST_MAX_BEND` with the faces' mean width under
+    ``a`` x ``spacing`` (the curve's radius under the spacing), and its normal's line lies
+    within :data:`CREST_LEVEL_DEG` of vertical (the mesh's :class:`MeshParts`, worked out
+    here unless given, join the faces)."""
+    faces = np.asarray(faces, np.int64)
+    out = np.zeros(len(faces), bool)
+    if len(faces) < 2:
+        return out
+    mesh = (parts or MeshParts(vertices, faces)).mesh
+    tri = mesh.triangles
+    longest = np.linalg.norm(np.roll(tri, -1, axis=1) - tri, axis=2).max(axis=1)
+    area = mesh.area_faces
+    width = np.divide(2 * area, longest, out=np.zeros_like(longest), where=longest > 0)
+    adj = np.asarray(mesh.face_adjacency)
+    if not len(adj):
+        return out
+    angle = np.asarray(mesh.face_adjacency_angles)
+    ends = np.asarray(mesh.face_adjacency_edges)
+    edge = np.linalg.norm(mesh.vertices[ends[:, 0]] - mesh.vertices[ends[:, 1]], axis=1)
+    curved = ((angle >= CREST_MIN_BEND) & (angle < CREST_MAX_BEND)
+              & ((width[adj[:, 0]] + width[adj[:, 1]]) / 2 < angle * spacing))
+    for side in (0, 1):
+        f = adj[:, side]
+        out[f[curved & (edge >= 0.5 * longest[f])]] = True
+    level = np.abs(np.asarray(mesh.face_normals)[:, 2]) >= np.cos(np.radians(CREST_LEVEL_DEG))
+    return out & (width < spacing / 2) & level & (area > 0)
+
+
+def crest_samples(geometry: Geometry, spacing: float, seed, face_mask=None,
+                  parts: "MeshParts | None" = None) -> tuple:
+    """Samples of the :func:`crest_faces` of a mesh (of those in ``face_mask``, (F,) bool,
+    if given), each face one every :data:`CREST_STEP` spacings of its longest edge, uniform
+    in the face: ((C, 3) points, (C, 3) face normals, (C,) face indices)."""
+    crest = crest_faces(geometry.vertices, geometry.faces, spacing, parts)
+    sel = np.flatnonzero(crest if face_mask is None else crest & np.asarray(face_mask, bool))
+    if not len(sel):
+        return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.int64)
+    tri = np.asarray(geometry.vertices, np.float64)[np.asarray(geometry.faces)[sel]]
+    longest = np.linalg.norm(np.roll(tri, -1, axis=1) - tri, axis=2).max(axis=1)
+    count = np.ceil(longest / (CREST_STEP * spacing)).astype(np.int64)
+    owner = np.repeat(np.arange(len(sel)), count)
+    rng = np.random.default_rng(seed)
+    a, b = rng.random((2, len(owner)))
+    flip = a + b > 1
+    a, b = np.where(flip, 1 - a, a), np.where(flip, 1 - b, b)
+    t = tri[owner]
+    points = t[:, 0] + a[:, None] * (t[:, 1] - t[:, 0]) + b[:, None] * (t[:, 2] - t[:, 0])
+    normal = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    return points, normal[owner], sel[owner]
 
 
 #: :func:`estimate_normals` fits each point's plane twice: the second time with the

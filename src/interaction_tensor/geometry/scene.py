@@ -14,12 +14,16 @@ from interaction_tensor.geometry.collision import MeshCollider
 from interaction_tensor.geometry.core import Geometry, validate_geometry
 from interaction_tensor.geometry.grid import build_grid, grid_cells
 from interaction_tensor.geometry.sampling import (
+    MeshParts,
     buried_samples,
+    crest_samples,
     estimate_normals,
     mean_spacing,
     mesh_area,
+    outward_faces,
     sample_mesh,
 )
+from interaction_tensor.geometry.sections import MeshSections
 
 #: Grid cell edge of the Numba nearest-neighbour search, in scene spacings (fastest of
 #: 1, 2, 3, 4 on the demo room; see benchmarks/).
@@ -64,9 +68,14 @@ class Scene:
     surface_noise: float = 0.0
     #: whether the normals were estimated (PCA of neighbourhoods; a cloud given without them)
     normals_estimated: bool = False
+    #: (N,) bool, where the normal is known to point out of the surface (a closed part of a
+    #: mesh, :func:`~.sampling.outward_faces`): the side N_aff must face there; None where
+    #: no normal's side is known
+    oriented: np.ndarray | None = field(default=None, repr=False)
     _tree: cKDTree | None = field(default=None, repr=False)
     _grid: object = field(default=None, repr=False)
     _collider: object = field(default=None, repr=False)
+    _sections: object = field(default=None, repr=False)
     _ground: object = field(default=None, repr=False)
     _columns: object = field(default=None, repr=False)
 
@@ -91,6 +100,13 @@ class Scene:
 
             self._collider = MeshCollider(*self.mesh, noise=self.surface_noise)
         return self._collider
+
+    def sections(self):
+        """The scene's triangles as :class:`~.sections.MeshSections` (exact plane cuts; built
+        on first use), or None for a scene without a mesh."""
+        if self._sections is None and self.mesh is not None:
+            self._sections = MeshSections(*self.mesh)
+        return self._sections
 
     def ground_level(self, points: np.ndarray, radius: float) -> np.ndarray:
         """(N,) the lowest scene point within ``radius`` (m) of each of ``points`` (N, 3)
@@ -320,15 +336,16 @@ def hot_copy(a: np.ndarray, order: np.ndarray) -> np.ndarray:
     return out
 
 
-def spatially_sorted(points: np.ndarray, normals: np.ndarray, spacing: float):
-    """``points`` and ``normals`` reordered cell by cell as :meth:`Scene.grid` sorts them, so
-    that the grid shares the scene's arrays instead of copying them (48 bytes a point) and
-    neighbouring points lie near each other in memory."""
+def spatially_sorted(points: np.ndarray, normals: np.ndarray, spacing: float, *more):
+    """``points`` and ``normals`` (and any ``more`` arrays of a value a point) reordered
+    cell by cell as :meth:`Scene.grid` sorts them, so that the grid shares the scene's
+    arrays instead of copying them (48 bytes a point) and neighbouring points lie near each
+    other in memory."""
 
     lin, *_ = grid_cells(points, GRID_CELL_FACTOR * spacing)
     order = np.argsort(lin, kind="stable")
     del lin
-    return hot_copy(points, order), hot_copy(normals, order)
+    return (hot_copy(points, order), hot_copy(normals, order)) + tuple(m[order] for m in more)
 
 
 def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
@@ -353,17 +370,29 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
         points, normals, faces = sample_mesh(geometry, count, seed, face_mask=face_mask,
                                              with_faces=True)
         notes = list(geometry.notes)
-        buried = buried_samples(geometry.vertices, geometry.faces, points, normals, faces)
+        parts = MeshParts(geometry.vertices, geometry.faces)
+        # a peg's or a thin rod's top: samples a quarter spacing apart along it
+        c_points, c_normals, c_faces = crest_samples(geometry, spacing, seed, face_mask, parts)
+        if len(c_points):
+            points = np.vstack([points, c_points])
+            normals = np.vstack([normals, c_normals])
+            faces = np.concatenate([faces, c_faces])
+        buried = buried_samples(geometry.vertices, geometry.faces, points, normals, faces,
+                                parts)
         if buried.any():
             keep = ~buried
-            points, normals = points[keep], normals[keep]
+            points, normals, faces = points[keep], normals[keep], faces[keep]
             notes.append(f"{int(buried.sum()):,} samples inside closed parts of the mesh "
                          "dropped (a surface another part covers: nothing can reach it)")
-        del faces
-        points, normals = spatially_sorted(points, normals, spacing)
+        # where a closed part says which side is out, the normals point out of it
+        side = outward_faces(geometry.vertices, geometry.faces, parts)[faces]
+        del faces, parts
+        normals *= np.where(side < 0, -1.0, 1.0)[:, None]
+        points, normals, oriented = spatially_sorted(points, normals, spacing, side != 0)
         return Scene(points, normals, spacing, geometry.source, sampled=True, notes=notes,
                      mesh=(np.asarray(geometry.vertices, np.float64),
-                           np.asarray(geometry.faces, np.int64)))
+                           np.asarray(geometry.faces, np.int64)),
+                     oriented=oriented if oriented.any() else None)
     points = geometry.vertices
     normals = geometry.normals
     if normals is not None and len(normals) != len(points):

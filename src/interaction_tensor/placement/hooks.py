@@ -36,6 +36,9 @@ FIT_REACH = 0.30
 FIT_MIN_SAMPLES = 2
 #: Scene samples closer than this (in scene spacings) belong to the same piece.
 FIT_LINK = 2.5
+#: On a mesh scene, the step (in scene spacings) of the points along the plane's exact cut
+#: of the mesh that :func:`fits` follows.
+SECTION_STEP = 0.2
 #: The object's bottom: its samples within this (m) of its lowest point.
 FREE_BAND = 0.03
 #: A bottom sample rests on a surface when one lies within this (m) of it.
@@ -99,19 +102,22 @@ def outline(samples: np.ndarray, centre, axis, up, side, nearest: float = 0.0,
 
 
 def opening(samples: np.ndarray, centre, axis, inside: float, slab: float = FIT_SLAB,
-            reach: float = FIT_REACH, nearest: float | None = None) -> Opening:
+            reach: float = FIT_REACH, nearest: float | None = None,
+            tight: bool = False) -> Opening:
     """The :class:`Opening` of radius ``inside`` (m) about ``centre``, in the plane normal
     to ``axis``, of an object with surface ``samples`` (same frame). What passes through it
     may go on past that radius only in the directions where the object does not close round
     it (its :func:`outline`, from ``nearest`` out; by default 0.9 of the radius): a strap's
     legs and its bag close the sides and below, a hook's wire and the hanger under it close
-    it all round, and only an open hook's gap stays open."""
+    it all round, and only an open hook's gap stays open. With ``tight``, not even that
+    far where the object's own outline is nearer (a towel's fold round its bar)."""
     axis, up, side = plane_frame(axis)
     centre = np.asarray(centre, float)
     nearest = 0.9 * inside if nearest is None else nearest
     closed = outline(samples, centre, axis, up, side, nearest, slab, reach)
+    limit = np.minimum(closed, inside) if tight else np.full(BINS, float(inside))
     return Opening(centre, axis, up, side, float(inside),
-                   np.where(np.isfinite(closed), float(inside), np.inf))
+                   np.where(np.isfinite(closed), limit, np.inf))
 
 
 def opening_of(samples: np.ndarray, section: np.ndarray) -> Opening | None:
@@ -120,8 +126,11 @@ def opening_of(samples: np.ndarray, section: np.ndarray) -> Opening | None:
     the descriptor's ``through_section``: the rail widened by a spacing, which fills a
     hook's opening), or None without a section: centred on the section's centroid, across
     its plane, as wide as the section. Its outline is followed from 0.9 of the section's
-    radius or of the object's own nearest sample in the plane, whichever is nearer: a towel's
-    fold or a mug's handle is tighter round its bar than the widened section."""
+    radius or of the object's own nearest sample in the plane, whichever is nearer, and
+    bounds what passes through where it is nearer than the section (``tight``): a towel's
+    fold or a mug's handle hugs its bar closer than the widened section, and a bar held
+    against the fold's cloth from inside (the towel hung from the bar's underside) or a
+    wall's top under it goes on past the fold."""
     section = np.asarray(section, float)
     if len(section) < 3 or len(samples) == 0:
         return None
@@ -132,12 +141,14 @@ def opening_of(samples: np.ndarray, section: np.ndarray) -> Opening | None:
     h = d @ axis
     r = np.sqrt(np.maximum(np.einsum("ij,ij->i", d, d) - h * h, 0.0))[np.abs(h) <= FIT_SLAB]
     own = float(r.min()) if len(r) else inside
-    return opening(samples, centre, axis, inside, nearest=0.9 * min(inside, own))
+    return opening(samples, centre, axis, inside, nearest=0.9 * min(inside, own),
+                   tight=True)
 
 
 def fits(opening: Opening, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
          tree: cKDTree, spacing: float, margin: float = FIT_MARGIN,
-         min_samples: int = FIT_MIN_SAMPLES, reach: float = FIT_REACH) -> bool:
+         min_samples: int = FIT_MIN_SAMPLES, reach: float = FIT_REACH,
+         sections=None) -> bool:
     """Whether what passes through the opening, posed by ``rot`` (3, 3) and ``t`` (3,),
     fits inside it. The scene's samples (``points`` and their ``tree``, at ``spacing``)
     within a spacing of the posed plane and ``reach`` of its centre are split into connected
@@ -145,23 +156,36 @@ def fits(opening: Opening, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
     within the opening's limit, plus ``margin``, in each direction (fewer than
     ``min_samples`` past it): a rail, a rod, a peg or a tap's spout lies inside a hook; a
     shelf board, a desk top or a counter's lip goes on sideways through the hook's wire or
-    a bag's strap, which cannot be put round it. True when nothing passes through."""
+    a bag's strap, which cannot be put round it. True when nothing passes through.
+
+    With ``sections`` (the scene mesh's :class:`~interaction_tensor.geometry.sections.
+    MeshSections`), the scene crossing the plane is the mesh's exact cut by it instead of
+    the samples near it, a point every :data:`SECTION_STEP` of a spacing along it, and a
+    piece fails with a spacing's length of cut past the limit: random samples leave gaps of
+    several centimetres in a thin slab, and a wall's top under a towel's fold then looks
+    like a rod."""
     c = rot @ opening.centre + t
-    near = np.asarray(tree.query_ball_point(c, reach), np.int64)
-    d = (points[near] - c) @ rot                      # the opening's (training) frame
-    d = d[np.abs(d @ opening.axis) <= spacing]
+    if sections is not None:
+        step = SECTION_STEP * spacing
+        d = (sections.points(c, rot @ opening.axis, reach, step) - c) @ rot
+        link, least = FIT_LINK * step, max(min_samples, int(round(1.0 / SECTION_STEP)))
+    else:
+        near = np.asarray(tree.query_ball_point(c, reach), np.int64)
+        d = (points[near] - c) @ rot                      # the opening's (training) frame
+        d = d[np.abs(d @ opening.axis) <= spacing]
+        link, least = FIT_LINK * spacing, min_samples
     x, z = d @ opening.side, d @ opening.up
     r = np.hypot(x, z)
     inside = r <= opening.inside
     if not inside.any():
         return True
-    pairs = cKDTree(d).query_pairs(FIT_LINK * spacing, output_type="ndarray")
+    pairs = cKDTree(d).query_pairs(link, output_type="ndarray")
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
                        shape=(len(d), len(d)))
     _, label = connected_components(graph, directed=False)
     through = np.isin(label, np.unique(label[inside]))
     out = r[through] > opening.limit[direction_bins(x[through], z[through])] + margin
-    return int(out.sum()) < min_samples
+    return int(out.sum()) < least
 
 
 def bottom(samples: np.ndarray, band: float = FREE_BAND) -> np.ndarray:
