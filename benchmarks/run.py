@@ -3,12 +3,19 @@
     python benchmarks/run.py                     # every case below; about 25 minutes on 2 cores
     python benchmarks/run.py --only detect many  # some of them
     python benchmarks/run.py --protocol          # also the paper's protocol (14 scenes x 8)
+    python benchmarks/run.py --baseline REV      # and the same cases on git revision REV
 
 Writes every figure to ``results/benchmarks/results.json`` (git-ignored) and the summary,
 ``benchmarks/RESULTS.md``, which it overwrites: each figure with its command, the machine and,
 where there is one, the ratio to the reference measured in the same run. Each case runs in a
 process of its own, after the kernels are compiled (except the first-run case, which measures
 compilation). The data come from ../shared/data (or $ITENSOR_SHARED_DATA).
+
+With ``--baseline REV`` the ``detect``, ``many``, ``prepare`` and ``protocol`` cases run a
+second time on the library of git revision REV (its ``src/`` exported into
+``results/benchmarks/baseline/``, its kernels compiled there first), one after the other on
+the same machine: each figure then has its ratio to REV's, and whether the two made the same
+decisions (the same accepted pairs and the same top k).
 
 Cases:
 
@@ -25,6 +32,13 @@ Cases:
 - ``density``: the places of a mesh scene against those of the same scene as clouds from 0.5
   to 3 times the descriptor's spacing, with and without normals (the demo room and bowl; a
   YCB mug trained on a plain box, in living-room2, 10 % test points);
+- ``tests``: each placement test alone on 20,000 candidates of a seated person and a rider in
+  living-room4, the paper's bowl in kitchen5 and the hanger in kitchen1: microseconds a pair
+  and the share of pairs it rejects, and the cost of the tests in the library's order
+  (``placement.checks.TEST_ORDER``) against the cheapest order of all;
+- ``prepare``: seconds per million points to prepare living-room4 (a mesh: sampling, closed
+  parts, the grid and its tables) and a 2 M-point cloud without normals, and to write a
+  1.5 M-point scene's result (predictions, accepted pairs, heat map, glTF and picture);
 - ``protocol`` (with ``--protocol``): detection of the paper's 8 examples on its 14 scenes.
 """
 
@@ -47,7 +61,9 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 DATA = Path(os.environ.get("ITENSOR_SHARED_DATA", ROOT.parent / "shared" / "data"))
 OUT = ROOT / "results" / "benchmarks"
-CASES = ("train", "detect", "many", "demo", "memory", "density")
+CASES = ("train", "detect", "many", "tests", "prepare", "demo", "memory", "density")
+#: The cases ``--baseline`` runs on the baseline too
+BASELINE_CASES = ("detect", "many", "prepare", "protocol")
 #: (label, scene, example, sample fraction) of the detection cases
 DETECT = (("demo room, the demo's bowl", "demo", "demo", 0.3),
           ("kitchen5, placing-bowl", "kitchen5", "placing-bowl", 0.3),
@@ -112,7 +128,7 @@ def case_detect(scene_name: str, example: str, fraction: float) -> dict:
     seconds = time.perf_counter() - t
     st = det.stats
     out = {"scene_points": len(scene), "candidates": st["candidates_after_normal_filter"],
-           "pairs": st["pairs"], "seconds": round(seconds, 2),
+           "pairs": st["pairs"], "seconds": round(seconds, 2), "decisions": _digest(det),
            "placement_tests_s": st["seconds"]["placement_tests"],
            "scoring_s": st["scoring_seconds"], "collision_s": st["seconds"]["collision"],
            "candidates_per_s": round(st["candidates_per_second"] or 0, 1),
@@ -140,6 +156,21 @@ def case_detect(scene_name: str, example: str, fraction: float) -> dict:
     return out
 
 
+def _digest(det) -> str:
+    """A fingerprint of a detection's decisions: its accepted (point, orientation) pairs and
+    its top k (pose and score), to tell whether two runs decided alike."""
+    import hashlib
+
+    h = hashlib.sha1()
+    acc = np.flatnonzero(det.pairs.accepted)
+    h.update(np.asarray(det.pair_point, np.int64)[acc].tobytes())
+    h.update(np.asarray(det.pair_orientation, np.int64)[acc].tobytes())
+    for p in det.predictions:
+        h.update(np.round(np.asarray(p.pose, float), 9).tobytes())
+        h.update(np.float64(round(p.score, 12)).tobytes())
+    return h.hexdigest()[:16]
+
+
 def case_many(scene_name: str, fraction: float) -> dict:
     import interaction_tensor as it
     from interaction_tensor import affordances
@@ -148,18 +179,112 @@ def case_many(scene_name: str, fraction: float) -> dict:
                for n in affordances.example_names()]
     scene = _scene(scene_name, tensors[0].scene_spacing)
     settings = it.DetectSettings(sample_fraction=fraction)
-    alone = {}
+    alone, digests = {}, []
     for t_ in tensors:
         t = time.perf_counter()
-        it.detect_many(scene, [t_], settings)
+        digests.append(_digest(it.detect_many(scene, [t_], settings)[0]))
         alone[t_.affordance] = round(time.perf_counter() - t, 2)
     t = time.perf_counter()
-    it.detect_many(scene, tensors, settings)
+    dets = it.detect_many(scene, tensors, settings)
     together = time.perf_counter() - t
     slowest = max(alone.values())
     return {"alone_s": alone, "one_pass_s": round(together, 2), "slowest_alone_s": slowest,
             "ratio_to_slowest": round(together / slowest, 2),
-            "ratio_to_sum": round(together / sum(alone.values()), 2)}
+            "ratio_to_sum": round(together / sum(alone.values()), 2),
+            "one_pass_as_alone": [_digest(d) for d in dets] == digests,
+            "decisions": "-".join(digests)}
+
+
+#: (label, scene, example) of the tests case
+TESTS = (("living-room4, sitting-human", "living-room4", "sitting-human"),
+         ("living-room4, riding-human", "living-room4", "riding-human"),
+         ("kitchen5, placing-bowl", "kitchen5", "placing-bowl"),
+         ("kitchen1, hanging-hanger", "kitchen1", "hanging-hanger"))
+TEST_CANDIDATES = 20_000
+
+
+def case_tests(scene_name: str, example: str) -> dict:
+    """Each placement test alone on the pairs of :data:`TEST_CANDIDATES` candidates: us a
+    pair and the share rejected; the tests' cost in ``TEST_ORDER`` and in the cheapest
+    order of all (each test on the pairs that passed those before it)."""
+    import itertools
+
+    import interaction_tensor as it
+    from interaction_tensor.detection.search import candidates
+    from interaction_tensor.placement import checks
+    from interaction_tensor.settings import PLACEMENT_TESTS
+
+    tensor = _descriptor(example)
+    scene = _scene(scene_name, tensor.scene_spacing)
+    settings = it.DetectSettings().for_scene(scene)
+    grid = scene.grid()
+    grid.free                                         # the scene's tables, built once
+    scene.columns().table()
+    scene.ground_level(scene.points[:1], 1.0)
+    cand = candidates(scene, tensor, settings)
+    cand = np.sort(np.random.default_rng(0).choice(cand, min(TEST_CANDIDATES, len(cand)),
+                                                   replace=False))
+    n_o = settings.n_orientations
+    at = scene.points[np.repeat(cand, n_o)]
+    orient = np.tile(np.arange(n_o), len(cand))
+    cost, fails = {}, {}
+    for name in checks.TEST_ORDER:
+        only = it.DetectSettings(skip_tests=tuple(t for t in PLACEMENT_TESTS if t != name))
+        t = time.perf_counter()
+        outcome = checks.check_placements(at, orient, tensor, only, scene, grid)[1]
+        seconds = time.perf_counter() - t
+        if (outcome != checks.PLACED).any() or seconds > 1e-3:
+            cost[name], fails[name] = seconds / len(at), outcome != checks.PLACED
+
+    def total(order):
+        alive, c = np.ones(len(at), bool), 0.0
+        for name in order:
+            c += alive.sum() * cost[name]
+            alive &= ~fails[name]
+        return c
+    used = [n for n in checks.TEST_ORDER if n in cost]
+    best = min(itertools.permutations(used), key=total)
+    return {"pairs": int(len(at)),
+            "tests": {n: {"us_per_pair": round(1e6 * cost[n], 2),
+                          "rejects": round(float(fails[n].mean()), 3)} for n in used},
+            "order_s": round(total(used), 3), "best_order": list(best),
+            "best_order_s": round(total(best), 3)}
+
+
+def case_prepare() -> dict:
+    """Seconds per million points to prepare a mesh scene and a cloud without normals, and
+    to write a 1.5 M-point scene's result with its picture."""
+    import interaction_tensor as it
+    from interaction_tensor.geometry.files import write_ply_points
+
+    out = {}
+    t = time.perf_counter()
+    scene = _scene("living-room4", 0.01)
+    seconds = time.perf_counter() - t
+    t = time.perf_counter()
+    grid = scene.grid()
+    getattr(grid, "free", None)                       # the tables, where the library has them
+    if hasattr(scene, "columns"):
+        scene.columns().table()
+    tables = time.perf_counter() - t
+    out["mesh"] = {"points": len(scene), "seconds": round(seconds, 2),
+                   "tables_s": round(tables, 2),
+                   "s_per_million": round((seconds + tables) / len(scene) * 1e6, 2)}
+    with tempfile.TemporaryDirectory() as tmp:
+        cloud = Path(tmp) / "room.ply"
+        write_ply_points(cloud, room_cloud(2_000_000))
+        t = time.perf_counter()
+        c = it.load_scene(cloud, 0.01)
+        seconds = time.perf_counter() - t
+        out["cloud"] = {"points": len(c), "seconds": round(seconds, 2),
+                        "s_per_million": round(seconds / len(c) * 1e6, 2)}
+        del c
+        big = _scene("kitchen5", 0.01)
+        det = it.detect(big, _descriptor("placing-bowl"), sample_fraction=0.01)
+        t = time.perf_counter()
+        det.save(Path(tmp) / "out")
+        out["write"] = {"points": len(big), "seconds": round(time.perf_counter() - t, 2)}
+    return out
 
 
 def _child(cmd: list, env=None) -> tuple[float, float]:
@@ -305,13 +430,33 @@ def one(argv: list) -> None:
     if name != "demo":
         _warm()
     fn = {"train": case_train, "detect": case_detect, "many": case_many, "demo": case_demo,
-          "memory": case_memory, "protocol": case_protocol, "density": case_density}[name]
+          "memory": case_memory, "protocol": case_protocol, "density": case_density,
+          "tests": case_tests, "prepare": case_prepare}[name]
     print(json.dumps(fn(*args)))
 
 
-def run_case(name: str, *args) -> dict:
+def baseline_tree(rev: str) -> Path:
+    """The library of git revision ``rev`` exported (``git archive``) into
+    ``results/benchmarks/baseline/REV``, once; returns its ``src`` folder."""
+    sha = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", rev],
+                         capture_output=True, text=True, check=True).stdout.strip()
+    where = OUT / "baseline" / sha
+    if not (where / "src" / "interaction_tensor").exists():
+        where.mkdir(parents=True, exist_ok=True)
+        archive = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", sha,
+                                  "src"], capture_output=True, check=True).stdout
+        subprocess.run(["tar", "-x", "-C", str(where)], input=archive, check=True)
+    return where / "src"
+
+
+def run_case(name: str, *args, library: Path | None = None) -> dict:
+    """One case in a child process: on this tree's library, or on ``library`` (a
+    :func:`baseline_tree`)."""
+    env = dict(os.environ)
+    if library is not None:
+        env["PYTHONPATH"] = os.pathsep.join([str(library), env.get("PYTHONPATH", "")])
     proc = subprocess.run([sys.executable, __file__, "--one", name, json.dumps(list(args))],
-                          capture_output=True, text=True)
+                          capture_output=True, text=True, env=env)
     if proc.returncode:
         raise SystemExit(f"case {name}{args} failed:\n{proc.stderr[-3000:]}")
     return json.loads(proc.stdout.strip().splitlines()[-1])
@@ -325,13 +470,24 @@ def machine() -> str:
             f"({numba.config.NUMBA_NUM_THREADS} threads)")
 
 
+def _ratio(old, new) -> str:
+    return f"{old / new:.1f}x" if new else "n/a"
+
+
 def markdown(res: dict) -> str:
+    base = res.get("baseline", {})
+    rev = res.get("baseline_rev")
     lines = ["# Benchmark results", "",
              f"Written by `python benchmarks/run.py`{' --protocol' if 'protocol' in res else ''}"
-             f" on {res['machine']}, the machine otherwise idle. Ratios compare two "
-             "measurements made in the same run. Rates count candidates (test points past the "
-             "normal filter, every orientation decided by the placement tests and the score) "
-             "over the seconds of both.", ""]
+             f"{f' --baseline {rev}' if base else ''} on {res['machine']}, the machine "
+             "otherwise idle. Ratios compare two measurements made in the same run. Rates "
+             "count candidates (test points past the normal filter, every orientation decided "
+             "by the placement tests and the score) over the seconds of both.", ""]
+    if base:
+        lines += [f"`{rev}` (the baseline) is the library of git revision {rev}, measured "
+                  "in the same run on the same machine, one case after the other; *same "
+                  "decisions* says whether both accepted the same pairs and predicted the "
+                  "same top k.", ""]
     if len(set(res.get("runs", {}).values())) > 1:
         groups: dict = {}
         for case, r in res["runs"].items():
@@ -339,26 +495,74 @@ def markdown(res: dict) -> str:
         lines += ["Measured in separate runs (`--only`): " + "; ".join(
             ", ".join(v) for _, v in sorted(groups.items())) + ".", ""]
     if "detect" in res:
+        b = base.get("detect", {})
         lines += ["## Detection at the defaults (30 % test points)", "",
-                  "| case | scene points | candidates | seconds | placement tests / scoring s "
-                  "| candidates/s | exact reference on 1,000 candidates: same decisions, "
-                  "Numba / reference candidates/s, ratio |",
-                  "|---|---:|---:|---:|---:|---:|---|"]
+                  "| case | scene points | candidates | seconds | placement tests / scoring / "
+                  "collision s | candidates/s | exact reference on 1,000 candidates: same "
+                  "decisions, Numba / reference candidates/s, ratio |"
+                  + (f" `{rev}` seconds (tests / scoring / collision) | ratio | same decisions |"
+                     if b else ""),
+                  "|---|---:|---:|---:|---:|---:|---|" + ("---:|---:|---|" if b else "")]
         for label, r in res["detect"].items():
             ref = r["reference"]
-            lines.append(
-                f"| {label} | {r['scene_points']:,} | {r['candidates']:,} | {r['seconds']} | "
-                f"{r['placement_tests_s']:.1f} / {r['scoring_s']:.1f} | "
-                f"{r['candidates_per_s']:,.0f} | {'yes' if ref['identical_decisions'] else 'NO'}"
-                f", {ref['numba_candidates_per_s']:,.0f} / "
-                f"{ref['reference_candidates_per_s']:,.0f}, {ref['ratio']}x |")
+            row = (f"| {label} | {r['scene_points']:,} | {r['candidates']:,} | {r['seconds']} | "
+                   f"{r['placement_tests_s']:.1f} / {r['scoring_s']:.1f} / "
+                   f"{r.get('collision_s', 0):.1f} | {r['candidates_per_s']:,.0f} | "
+                   f"{'yes' if ref['identical_decisions'] else 'NO'}, "
+                   f"{ref['numba_candidates_per_s']:,.0f} / "
+                   f"{ref['reference_candidates_per_s']:,.0f}, {ref['ratio']}x |")
+            if label in b:
+                o = b[label]
+                row += (f" {o['seconds']} ({o['placement_tests_s']:.1f} / {o['scoring_s']:.1f}"
+                        f" / {o.get('collision_s', 0):.1f}) | {_ratio(o['seconds'], r['seconds'])}"
+                        f" | {'yes' if o.get('decisions') == r.get('decisions') else 'NO'} |")
+            lines.append(row)
+        lines.append("")
+    if "tests" in res:
+        lines += ["## The placement tests, each alone", "",
+                  f"On the pairs of {TEST_CANDIDATES:,} candidates (8 orientations each) at "
+                  "the defaults: microseconds a pair and the share it rejects; then the cost of "
+                  "all of them in the library's order (each on the pairs the tests before it "
+                  "left) and in the cheapest order of all.", "",
+                  "| case | test: us a pair, rejects | in the library's order, s | cheapest "
+                  "order, s |", "|---|---|---:|---|"]
+        for label, r in res["tests"].items():
+            tests = "; ".join(f"{n} {v['us_per_pair']}, {100 * v['rejects']:.0f} %"
+                              for n, v in r["tests"].items())
+            lines.append(f"| {label} | {tests} | {r['order_s']} | {r['best_order_s']} "
+                         f"({', '.join(r['best_order'])}) |")
         lines.append("")
     if "many" in res:
         m = res["many"]
         lines += ["## The 8 examples in one pass (kitchen5, 30 %)", "",
                   f"One pass: {m['one_pass_s']} s; the slowest example alone: "
                   f"{m['slowest_alone_s']} s ({m['ratio_to_slowest']}x); the 8 alone: "
-                  f"{sum(m['alone_s'].values()):.1f} s (one pass {m['ratio_to_sum']}x).", ""]
+                  f"{sum(m['alone_s'].values()):.1f} s (one pass {m['ratio_to_sum']}x)"
+                  + ("; the same decisions as each alone" if m.get("one_pass_as_alone")
+                     else "") + "."]
+        if "many" in base:
+            o = base["many"]
+            lines.append(f"`{rev}`: one pass {o['one_pass_s']} s "
+                         f"({_ratio(o['one_pass_s'], m['one_pass_s'])}), the slowest alone "
+                         f"{o['slowest_alone_s']} s; same decisions: "
+                         f"{'yes' if o.get('decisions') == m.get('decisions') else 'NO'}.")
+        lines.append("")
+    if "prepare" in res:
+        p = res["prepare"]
+        o = base.get("prepare")
+
+        def vs(key, field):
+            return (f" (`{rev}` {o[key][field]}, {_ratio(o[key][field], p[key][field])})"
+                    if o else "")
+        lines += ["## Preparing and writing", "",
+                  f"- living-room4 (a mesh, {p['mesh']['points']:,} samples): "
+                  f"{p['mesh']['s_per_million']} s per million points, its tables included"
+                  f"{vs('mesh', 's_per_million')};",
+                  f"- a {p['cloud']['points']:,}-point cloud without normals: "
+                  f"{p['cloud']['s_per_million']} s per million points{vs('cloud', 's_per_million')};",
+                  f"- writing kitchen5's result ({p['write']['points']:,} points: predictions, "
+                  f"accepted pairs, heat map, glTF, picture): {p['write']['seconds']} s"
+                  f"{vs('write', 'seconds')}.", ""]
     if "demo" in res:
         d = res["demo"]
         lines += ["## The demo (`itensor demo`, its picture included)", "",
@@ -390,9 +594,11 @@ def markdown(res: dict) -> str:
         lines.append("")
     if "protocol" in res:
         p = res["protocol"]
+        o = base.get("protocol")
         lines += ["## The paper's protocol, detection only", "",
-                  f"The 8 examples on the 14 published scenes at 30 %: {p['total_min']} min.",
-                  ""]
+                  f"The 8 examples on the 14 published scenes at 30 %: {p['total_min']} min"
+                  + (f" (`{rev}`: {o['total_min']} min, {_ratio(o['total_min'], p['total_min'])})"
+                     if o else "") + ".", ""]
     return "\n".join(lines)
 
 
@@ -401,6 +607,9 @@ def main() -> None:
     ap.add_argument("--one", nargs=2, help=argparse.SUPPRESS)
     ap.add_argument("--only", nargs="+", choices=CASES, default=list(CASES))
     ap.add_argument("--protocol", action="store_true", help="also the paper's protocol")
+    ap.add_argument("--baseline", metavar="REV",
+                    help="also run the detect, many, prepare and protocol cases on git "
+                         "revision REV's library, for their ratios")
     args = ap.parse_args()
     if args.one:
         one(args.one)
@@ -412,23 +621,35 @@ def main() -> None:
     res["machine"] = machine()
     res.setdefault("runs", {c: 1 for c in CASES + ("protocol",) if c in res})
     run_id = len(set(res["runs"].values())) + 1 if res["runs"] else 1
-    for name in args.only:
+    library = None
+    if args.baseline:
+        library = baseline_tree(args.baseline)
+        res["baseline_rev"] = library.parent.name
+        res.setdefault("baseline", {})
+
+    def measure(name, lib=None):
+        if name == "detect":
+            return {label: run_case("detect", scene, example, frac, library=lib)
+                    for label, scene, example, frac in DETECT}
+        if name == "many":
+            return run_case("many", "kitchen5", 0.3, library=lib)
+        if name == "density":
+            return {label: run_case("density", scene, example, frac, list(factors))
+                    for label, scene, example, frac, factors in DENSITY}
+        if name == "tests":
+            return {label: run_case("tests", scene, example) for label, scene, example in TESTS}
+        return run_case(name, library=lib)
+
+    names = list(args.only) + (["protocol"] if args.protocol else [])
+    for name in names:
         res["runs"][name] = run_id
         t = time.perf_counter()
-        if name == "detect":
-            res["detect"] = {label: run_case("detect", scene, example, frac)
-                             for label, scene, example, frac in DETECT}
-        elif name == "many":
-            res["many"] = run_case("many", "kitchen5", 0.3)
-        elif name == "density":
-            res["density"] = {label: run_case("density", scene, example, frac, list(factors))
-                              for label, scene, example, frac, factors in DENSITY}
-        else:
-            res[name] = run_case(name)
+        res[name] = measure(name)
+        if library is not None and name in BASELINE_CASES:
+            res["baseline"][name] = measure(name, library)
+        elif "baseline" in res:
+            res["baseline"].pop(name, None)
         print(f"{name}: {time.perf_counter() - t:.0f} s", flush=True)
-    if args.protocol:
-        res["protocol"] = run_case("protocol")
-        res["runs"]["protocol"] = run_id
     OUT.mkdir(parents=True, exist_ok=True)
     (OUT / "results.json").write_text(json.dumps(res, indent=1))
     (HERE / "RESULTS.md").write_text(markdown(res))

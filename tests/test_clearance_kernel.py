@@ -126,3 +126,48 @@ def test_contact_and_seat_fractions_on_the_grid_equal_the_reference():
     fast = seat_fractions(pts, orient, ride, 0.03, 8, room, room.grid())
     assert (ref > 0).any() and (ref < 1).any()
     np.testing.assert_array_equal(fast, ref)
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_a_cells_free_distance_is_what_its_box_keeps_from_every_sample(seed):
+    """The free table (every cell's distance to the nearest non-empty cell's box) bounds
+    from below the nearest-sample distance of any point in the cell, and is exact for the
+    boxes: the brute-force box distance to the nearest non-empty cell."""
+    from scipy.spatial import cKDTree
+
+    from interaction_tensor.geometry.grid import free_distances
+
+    rng = np.random.default_rng(seed)
+    pts = np.vstack([np.c_[rng.uniform(0, 1, (3000, 2)), np.zeros(3000)],
+                     rng.uniform(0, 1, (40, 3)) * [1, 1, 0.7]])
+    grid = build_grid(pts, np.zeros_like(pts), 0.05)
+    free = free_distances(grid)
+    assert free is grid.free or np.array_equal(free, grid.free)
+    dims = grid.dims
+    occupied = np.argwhere((np.diff(grid.starts) > 0).reshape(tuple(dims)))
+    cells = np.argwhere(np.ones(tuple(dims), bool))
+    gap = np.maximum(np.abs(cells[:, None, :] - occupied[None]) - 1, 0)
+    box = np.sqrt((gap ** 2).sum(axis=2)).min(axis=1) * grid.cell
+    np.testing.assert_allclose(free, box, rtol=1e-6, atol=1e-7)
+    assert (free > 0).any() and (free == 0).any()
+    q = rng.uniform(grid.origin, grid.origin + dims * grid.cell, (20000, 3))
+    c = np.minimum(np.floor((q - grid.origin) / grid.cell).astype(int), dims - 1)
+    lin = (c[:, 0] * dims[1] + c[:, 1]) * dims[2] + c[:, 2]
+    d, _ = cKDTree(pts).query(q)
+    assert (d >= free[lin] - 1e-6).all()
+
+
+def test_contact_with_an_angle_on_the_grid_equals_the_reference():
+    """With an angle test the nearest sample within the largest distance is searched on the
+    grid, and its normal read: the fractions equal those of the cKDTree's nearest samples."""
+    room = it.prepare_scene(affordances.build("sitting-human").scene_object, 0.01, seed=0)
+    rng = np.random.default_rng(5)
+    idx = rng.integers(0, len(room.points), 3000)
+    pts = room.points[idx] + rng.normal(0, 0.05, (3000, 3)) * (rng.random((3000, 1)) < 0.5)
+    orient = rng.integers(0, 8, len(idx))
+    sit = affordances.build_descriptor("sitting-human", seed=0, spacing=0.02)
+    tests = [(0.02, 30.0), (0.05, 60.0), (0.03, 90.0)]
+    ref = contact_fractions(pts, orient, sit, tests, 8, room, None)
+    fast = contact_fractions(pts, orient, sit, tests, 8, room, room.grid())
+    assert 0 < ref[:, 0, 0].mean() < 1 and (ref[:, 0] != ref[:, 1]).any()
+    np.testing.assert_array_equal(fast, ref)

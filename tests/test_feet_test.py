@@ -78,6 +78,38 @@ def test_the_column_search_is_exactly_a_brute_force_search(seed, g):
     np.testing.assert_array_equal(got, _highest_under_reference(pts, xy, limit))
 
 
+@given(st.integers(0, 2 ** 31 - 1), st.integers(1, 5))
+def test_the_column_kernel_finds_what_the_column_search_finds(seed, g):
+    """Detection's feet test reads the column table with a Numba kernel that poses each
+    foot's points itself: the same heights as the searched (P, F, 2) arrays."""
+    from interaction_tensor.placement._kernels import highest
+
+    rng = np.random.default_rng(seed)
+    pts = rng.uniform((-0.5, -0.4, 0.0), (0.5, 0.4, 1.0), (rng.integers(1, 400), 3))
+    pts[: len(pts) // 3, 2] = np.round(pts[: len(pts) // 3, 2], 1)
+    scene = it.Scene(pts, np.tile([0.0, 0.0, 1.0], (len(pts), 1)), 0.01)
+    at = rng.uniform((-0.7, -0.7, 0.0), (0.7, 0.7, 1.0), (60, 3))
+    orient = rng.integers(0, 4, 60)
+    offsets = rng.normal(0.0, 0.1, (4, g, 2))
+    limit = rng.uniform(-0.1, 1.1, 60)
+    limit[:10] = np.round(limit[:10], 1)
+    columns = scene.columns()
+    got = highest(at, orient, offsets, limit, columns.table(), columns.cell)
+    want = scene.highest_under(at[:, None, :2] + offsets[orient], limit)
+    np.testing.assert_array_equal(got, want)
+
+
+def test_the_feet_test_on_the_grid_equals_the_reference(sitting):
+    room = it.prepare_scene(affordances.build("sitting-human").scene_object, 0.01, seed=0)
+    rng = np.random.default_rng(2)
+    at = room.points[rng.integers(0, len(room.points), 2000)]
+    orient = rng.integers(0, 8, len(at))
+    ref = feet_gaps(at, orient, sitting, room, 8)
+    fast = feet_gaps(at, orient, sitting, room, 8, room.grid())
+    assert np.isfinite(ref).any()
+    np.testing.assert_array_equal(fast, ref)
+
+
 def test_the_gap_is_the_drop_to_the_highest_sample_under_each_foot_or_the_ground(sitting):
     """A floor at 0 with a 30 cm step under part of the room; a scan with no floor, whose
     one sample beside the feet (a caster) is the ground."""

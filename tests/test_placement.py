@@ -186,3 +186,39 @@ def _copy_with(tensor, **acceptance):
     t = copy.deepcopy(tensor)
     t.set_acceptance(t.threshold(), **acceptance)
     return t
+
+
+@pytest.mark.parametrize("example", ["sitting-human", "riding-human", "hanging-hanger"])
+def test_the_order_of_the_tests_changes_no_decision(example):
+    """A pair is placed when it passes every test, whatever their order, and reports the
+    first of :data:`TEST_ORDER` it fails; each test alone gives the same answer as in the
+    sequence, on the grid and on the reference alike."""
+    from interaction_tensor.placement import checks
+    from interaction_tensor.settings import PLACEMENT_TESTS
+
+    ex = affordances.build(example)
+    tensor = affordances.build_descriptor(example, example=ex)
+    room = it.prepare_scene(demo.build().scene, 0.02, seed=0)
+    rng = np.random.default_rng(1)
+    at = room.points[rng.integers(0, len(room.points), 1500)]
+    orient = rng.integers(0, 8, len(at))
+    codes = {"fills": checks.FAILS_TAP, "ground": checks.FAILS_GROUND,
+             "mount": checks.FAILS_MOUNT, "feet": checks.FAILS_FEET,
+             "straddle": checks.FAILS_STRADDLE, "clearance": checks.FAILS_CLEARANCE,
+             "through": checks.FAILS_THROUGH, "interior": checks.FAILS_INTERIOR,
+             "contact": checks.FAILS_CONTACT}
+    assert set(checks.TEST_ORDER) == set(codes) and set(codes) <= set(PLACEMENT_TESTS)
+    for grid in (room.grid(), None):
+        _, outcome = check_placements(at, orient, tensor, it.DetectSettings(), room, grid)
+        alone = {}
+        for name in checks.TEST_ORDER:
+            others = tuple(t for t in PLACEMENT_TESTS if t != name)
+            alone[name] = check_placements(at, orient, tensor,
+                                           it.DetectSettings(skip_tests=others), room,
+                                           grid)[1] == PLACED
+        np.testing.assert_array_equal(outcome == PLACED,
+                                      np.all(list(alone.values()), axis=0))
+        for i in np.flatnonzero(outcome != PLACED):
+            first = next(n for n in checks.TEST_ORDER if not alone[n][i])
+            assert outcome[i] == codes[first]
+        assert (outcome != PLACED).any() and len(np.unique(outcome)) >= 2

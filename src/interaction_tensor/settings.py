@@ -17,7 +17,9 @@ from interaction_tensor.errors import SettingsError
 CRITERIA = ("paper", "gaussian")
 KEYPOINT_SETS = ("weighted", "uniform")
 BACKENDS = ("auto", "numba", "numpy", "torch")
-#: The placement tests, in the order detection runs them (``DetectSettings.skip_tests``).
+#: The placement tests by name (``DetectSettings.skip_tests``); the per-pair ones run in
+#: the order of ``placement.checks.TEST_ORDER``, the ranked ones (collision, hangs) on the
+#: poses that would enter the top k.
 PLACEMENT_TESTS = ("clearance", "contact", "interior", "ground", "feet", "straddle", "mount",
                    "through", "collision", "hangs", "fills")
 #: The normal filter's tolerance (degrees) where neither the settings nor the descriptor

@@ -61,6 +61,15 @@ class Grid:
     dims: np.ndarray
     occ: np.ndarray = field(default=None, repr=False, compare=False)
     cache: object = field(default=None, repr=False, compare=False)
+    _free: np.ndarray = field(default=None, repr=False, compare=False)
+
+    @property
+    def free(self) -> np.ndarray:
+        """(C,) float32: :func:`free_distances` of the cells (built on first use, kept: the
+        placement tests of every descriptor read it)."""
+        if self._free is None:
+            self._free = free_distances(self)
+        return self._free
 
 
 def grid_cells(points: np.ndarray, cell: float):
@@ -143,3 +152,24 @@ def _block_occupancy(grid: Grid, cb: int) -> np.ndarray:
     pad[:nx, :ny, :nz] = full
     occ = pad.reshape(mb[0], cb, mb[1], cb, mb[2], cb).any(axis=(1, 3, 5))
     return np.ascontiguousarray(occ.ravel(), dtype=np.int8)
+
+
+def free_distances(grid: Grid) -> np.ndarray:
+    """(C,) float32: for each cell, the least distance (m) from any point of it to any sample:
+    the distance between its box and the nearest non-empty cell's (0 for a non-empty cell
+    and its 26 neighbours). A ball-emptiness or a bounded nearest-neighbour query whose
+    radius is at most its cell's free distance finds nothing without visiting a cell: most
+    of a seated person's clearance and interior points lie in open air. It is the exact
+    Euclidean distance transform (SciPy) of the occupancy dilated by one cell, in cells:
+    the nearest dilated cell's centre lies exactly as far as the nearest non-empty cell's box
+    (per axis, max(0, |di| - 1) cells)."""
+    from scipy.ndimage import binary_dilation, distance_transform_edt
+
+    shape = tuple(int(d) for d in grid.dims)
+    near = binary_dilation((np.diff(grid.starts) > 0).reshape(shape),
+                           structure=np.ones((3, 3, 3), bool))
+    if near.all():
+        return np.zeros(int(np.prod(shape)), np.float32)
+    out = distance_transform_edt(~near).astype(np.float32).reshape(-1)
+    out *= np.float32(grid.cell)
+    return out

@@ -115,15 +115,20 @@ class Scene:
             self._ground = GroundMap(self.points)
         return self._ground.level(points, radius)
 
-    def highest_under(self, xy: np.ndarray, limit: np.ndarray) -> np.ndarray:
-        """(P,) the highest scene sample one can stand on (its normal line within
-        :data:`STAND_ANGLE` of vertical) at most ``limit`` (P,) high in the 2 cm columns
-        under ``xy`` (P, G, 2) and their neighbours (:class:`ColumnIndex`, built on first
-        use); -inf where there is none."""
+    def columns(self) -> "ColumnIndex":
+        """The scene samples one can stand on (their normal line within
+        :data:`STAND_ANGLE` of vertical) by 2 cm column (:class:`ColumnIndex`, built on
+        first use)."""
         if self._columns is None:
             flat = np.abs(self.normals[:, 2]) >= np.cos(np.radians(STAND_ANGLE))
             self._columns = ColumnIndex(self.points[flat])
-        return self._columns.highest_under(xy, limit)
+        return self._columns
+
+    def highest_under(self, xy: np.ndarray, limit: np.ndarray) -> np.ndarray:
+        """(P,) the highest scene sample one can stand on at most ``limit`` (P,) high in the
+        2 cm columns under ``xy`` (P, G, 2) and their neighbours (:meth:`columns`); -inf
+        where there is none."""
+        return self.columns().highest_under(xy, limit)
 
     def __len__(self) -> int:
         return len(self.points)
@@ -190,6 +195,11 @@ class GroundMap:
 STAND_ANGLE = 45.0
 
 
+#: Most columns :meth:`ColumnIndex.table` lays out densely (8 bytes each): a 40 x 40 m
+#: extent at 2 cm.
+MAX_TABLE_COLUMNS = 4_000_000
+
+
 class ColumnIndex:
     """The scene's samples by vertical column of ``cell`` (m), each column's heights sorted:
     what lies under a place (detection's feet test). Stored as one sorted array of integer
@@ -209,6 +219,24 @@ class ColumnIndex:
         rank = np.searchsorted(self.z, points[:, 2], side="left")
         self.stride = len(self.z) + 1
         self.code = np.sort((ij[:, 0] * self.ny + ij[:, 1]) * self.stride + rank)
+
+    def table(self):
+        """The index as a dense table of columns, for the Numba feet test: (starts
+        (nx * ny + 1,) int64, each column's heights ``heights[starts[c]:starts[c + 1]]``
+        ascending, origin (2,) int64 column, nx, ny), column c = i * ny + j of the cell
+        (i, j) + origin; None where the scene's extent holds more than
+        :data:`MAX_TABLE_COLUMNS` columns (a large scan: :meth:`highest_under` serves it).
+        Built on first use."""
+        if "_table" not in self.__dict__:
+            key = self.code // self.stride
+            nx = int(key[-1] // self.ny) + 2
+            if nx * self.ny > MAX_TABLE_COLUMNS:
+                self._table = None
+            else:
+                starts = np.searchsorted(key, np.arange(nx * self.ny + 1)).astype(np.int64)
+                self._table = (starts, self.z[self.code % self.stride], self.origin.copy(),
+                               nx, self.ny)
+        return self._table
 
     def highest_under(self, xy: np.ndarray, limit: np.ndarray, chunk: int = 4096) -> np.ndarray:
         """(P,) the highest sample at most ``limit`` (P,) high in the columns under ``xy``

@@ -25,16 +25,44 @@ def _span(q, r, o, cell, n):
     return _cells(q - r, q + r, o, cell, n)
 
 
+#: Slack (m) on the free distance of a cell against the float32 rounding of its table: a
+#: ball is known empty only when its radius is at most the free distance less this.
+FREE_SLACK = 1e-6
+
+
+@njit(cache=True, inline="always")
+def _known_free(qx, qy, qz, r, free, ox, oy, oz, cell, nx, ny, nz):
+    """True when no sample can lie within r of q: q's cell is at least r (less
+    :data:`FREE_SLACK`) from every non-empty cell (``free``, :func:`.grid.free_distances`).
+    False outside the grid, or where the table cannot tell."""
+    ci = int(math.floor((qx - ox) / cell))
+    cj = int(math.floor((qy - oy) / cell))
+    ck = int(math.floor((qz - oz) / cell))
+    if ci < 0 or ci >= nx or cj < 0 or cj >= ny or ck < 0 or ck >= nz:
+        return False
+    return free[(ci * ny + cj) * nz + ck] - FREE_SLACK >= r
+
+
 @njit(cache=True, inline="always")
 def _occupied_within(qx, qy, qz, r, pts, starts, ox, oy, oz, cell, nx, ny, nz):
-    """True when some sample lies at a distance < r from q."""
+    """True when some sample lies at a distance < r from q. Only the cells whose box comes
+    within r of q (with 1 um of slack against the rounding of the box's edges) are
+    visited."""
     i0, i1 = _span(qx, r, ox, cell, nx)
     j0, j1 = _span(qy, r, oy, cell, ny)
     k0, k1 = _span(qz, r, oz, cell, nz)
+    rr = (r + 1e-6) * (r + 1e-6)
     for i in range(i0, i1 + 1):
+        gx = max(ox + i * cell - qx, qx - (ox + (i + 1) * cell), 0.0)
         for j in range(j0, j1 + 1):
+            gy = max(oy + j * cell - qy, qy - (oy + (j + 1) * cell), 0.0)
+            if gx * gx + gy * gy > rr:
+                continue
             base = (i * ny + j) * nz
             for k in range(k0, k1 + 1):
+                gz = max(oz + k * cell - qz, qz - (oz + (k + 1) * cell), 0.0)
+                if gx * gx + gy * gy + gz * gz > rr:
+                    continue
                 c = base + k
                 for p in range(starts[c], starts[c + 1]):
                     dx = pts[p, 0] - qx
@@ -46,19 +74,23 @@ def _occupied_within(qx, qy, qz, r, pts, starts, ox, oy, oz, cell, nx, ny, nz):
 
 
 @njit(cache=True, parallel=True)
-def violation_counts(points, orient, offsets, need, stop, pts, starts, origin, cell, dims,
-                     out):
+def violation_counts(points, orient, offsets, need, stop, pts, starts, free, origin, cell,
+                     dims, out):
     """out[i] = number of k with a sample nearer than need[k] to points[i] + offsets[orient[i], k],
-    counted up to ``stop`` (a pair stops there)."""
+    counted up to ``stop`` (a pair stops there). A point whose cell is known free that far
+    (``free``) costs one look-up."""
     ox, oy, oz = origin[0], origin[1], origin[2]
     nx, ny, nz = dims[0], dims[1], dims[2]
     for i in prange(points.shape[0]):
         o = orient[i]
         n = 0
         for k in range(need.shape[0]):
-            if _occupied_within(points[i, 0] + offsets[o, k, 0], points[i, 1] + offsets[o, k, 1],
-                                points[i, 2] + offsets[o, k, 2], need[k], pts, starts,
-                                ox, oy, oz, cell, nx, ny, nz):
+            qx = points[i, 0] + offsets[o, k, 0]
+            qy = points[i, 1] + offsets[o, k, 1]
+            qz = points[i, 2] + offsets[o, k, 2]
+            if _known_free(qx, qy, qz, need[k], free, ox, oy, oz, cell, nx, ny, nz):
+                continue
+            if _occupied_within(qx, qy, qz, need[k], pts, starts, ox, oy, oz, cell, nx, ny, nz):
                 n += 1
                 if n >= stop:
                     break
@@ -75,8 +107,8 @@ def counts(points, orient, offsets, need, grid, stop: int | None = None) -> np.n
                          np.ascontiguousarray(offsets, np.float64),
                          np.ascontiguousarray(need, np.float64),
                          len(need) + 1 if stop is None else int(stop), grid.points,
-                         grid.starts, np.asarray(grid.origin, np.float64), float(grid.cell),
-                         np.asarray(grid.dims, np.int64), out)
+                         grid.starts, grid.free, np.asarray(grid.origin, np.float64),
+                         float(grid.cell), np.asarray(grid.dims, np.int64), out)
     return out
 
 
@@ -209,8 +241,9 @@ def boxes(at, rot, box, grid) -> np.ndarray:
 
 
 @njit(cache=True, inline="always")
-def _scan_within(qx, qy, qz, s0, s1, pts, best):
-    """The least distance (m) from q of samples ``s0:s1`` and ``best``."""
+def _scan_nearest(qx, qy, qz, s0, s1, pts, best, at):
+    """The least distance (m) from q of samples ``s0:s1`` and ``best``, and its sample
+    (``at`` where none of them is nearer)."""
     for p in range(s0, s1):
         dx = pts[p, 0] - qx
         dy = pts[p, 1] - qy
@@ -218,29 +251,38 @@ def _scan_within(qx, qy, qz, s0, s1, pts, best):
         d = math.sqrt(dx * dx + dy * dy + dz * dz)
         if d < best:
             best = d
-    return best
+            at = p
+    return best, at
 
 
 @njit(cache=True, parallel=True)
-def bounded_nearest(q, lo, hi, pts, starts, origin, cell, dims, out):
+def bounded_nearest(q, lo, hi, pts, starts, free, origin, cell, dims, out, at):
     """out[i] = the distance of query i's nearest sample when it lies in (lo, hi], some
-    distance <= lo when one does (the query stops there), inf when none lies within hi.
-    Whether the nearest sample lies within any r in [lo, hi] is then ``out <= r``, as for
-    the exact nearest distance. The query's own cell is scanned first (a contact point
-    touching a surface stops there), then the other cells that meet the ball of ``hi``;
-    the distance is numpy's ``norm(p - q)`` (the same sums, in the same order)."""
+    distance <= lo when one does (the query stops there), inf when none lies within hi;
+    at[i] the sample (-1 with inf). Whether the nearest sample lies within any r in
+    [lo, hi] is then ``out <= r``, as for the exact nearest distance, and with ``lo`` 0,
+    ``at`` is the nearest sample itself wherever it lies within hi. A query whose cell is
+    known free past hi (``free``) costs one look-up; otherwise the query's own cell is
+    scanned first (a contact point touching a surface stops there), then the other cells
+    that meet the ball of ``hi``; the distance is numpy's ``norm(p - q)`` (the same sums,
+    in the same order)."""
     ox, oy, oz = origin[0], origin[1], origin[2]
     nx, ny, nz = dims[0], dims[1], dims[2]
     for i in prange(q.shape[0]):
         qx, qy, qz = q[i, 0], q[i, 1], q[i, 2]
         best = math.inf
+        near = -1
+        if _known_free(qx, qy, qz, hi, free, ox, oy, oz, cell, nx, ny, nz):
+            out[i] = math.inf
+            at[i] = -1
+            continue
         ci = int(math.floor((qx - ox) / cell))
         cj = int(math.floor((qy - oy) / cell))
         ck = int(math.floor((qz - oz) / cell))
         own = ci >= 0 and ci < nx and cj >= 0 and cj < ny and ck >= 0 and ck < nz
         if own:
             c = (ci * ny + cj) * nz + ck
-            best = _scan_within(qx, qy, qz, starts[c], starts[c + 1], pts, best)
+            best, near = _scan_nearest(qx, qy, qz, starts[c], starts[c + 1], pts, best, near)
         if best > lo:
             i0, i1 = _span(qx, hi, ox, cell, nx)
             j0, j1 = _span(qy, hi, oy, cell, ny)
@@ -262,22 +304,33 @@ def bounded_nearest(q, lo, hi, pts, starts, origin, cell, dims, out):
                         # against rounding of the box's edges) holds no sample within hi
                         if gx * gx + gy * gy + gz * gz > (hi + 1e-6) * (hi + 1e-6):
                             continue
-                        best = _scan_within(qx, qy, qz, starts[base + c],
-                                            starts[base + c + 1], pts, best)
+                        best, near = _scan_nearest(qx, qy, qz, starts[base + c],
+                                                   starts[base + c + 1], pts, best, near)
                         if best <= lo:
                             break
-        out[i] = best if best <= hi else math.inf
+        if best <= hi:
+            out[i] = best
+            at[i] = near
+        else:
+            out[i] = math.inf
+            at[i] = -1
 
 
-def nearest_within(q, lo: float, hi: float, grid) -> np.ndarray:
-    """(Q,) :func:`bounded_nearest` of queries ``q`` (Q, 3) on ``grid``."""
+def nearest_within(q, lo: float, hi: float, grid, index: bool = False):
+    """(Q,) :func:`bounded_nearest` of queries ``q`` (Q, 3) on ``grid``; with ``index``,
+    also (Q,) the samples found (indices into the scene's points, -1 where none)."""
     q = np.ascontiguousarray(q, np.float64).reshape(-1, 3)
     out = np.empty(len(q))
+    at = np.empty(len(q), np.int64)
     if len(q):
-        bounded_nearest(q, float(lo), float(hi), grid.points, grid.starts,
+        bounded_nearest(q, float(lo), float(hi), grid.points, grid.starts, grid.free,
                         np.asarray(grid.origin, np.float64), float(grid.cell),
-                        np.asarray(grid.dims, np.int64), out)
-    return out
+                        np.asarray(grid.dims, np.int64), out, at)
+    if not index:
+        return out
+    if grid.order is not None:
+        at = np.where(at >= 0, grid.order[np.maximum(at, 0)], -1)
+    return out, at
 
 
 @njit(cache=True, parallel=True)
@@ -367,3 +420,53 @@ def taps(openings, radius, height, disk, max_cover, max_angle, grid,
                  grid.starts, np.asarray(grid.origin, np.float64), float(grid.cell),
                  np.asarray(grid.dims, np.int64), out)
     return out.astype(bool)
+
+
+@njit(cache=True, parallel=True)
+def highest_offsets(points, orient, offsets, limit, starts, heights, origin, cell, nx, ny,
+                    out):
+    """out[i] = the highest of ``heights`` at most ``limit[i]`` in the columns (of edge
+    ``cell``, the :meth:`.scene.ColumnIndex.table`) under the points
+    ``points[i, :2] + offsets[orient[i], f]`` and their 8 neighbours, -inf where there is
+    none: :meth:`~.scene.ColumnIndex.highest_under` without its (P, F, 2) arrays."""
+    ox, oy = origin[0], origin[1]
+    for i in prange(points.shape[0]):
+        o = orient[i]
+        lim = limit[i]
+        best = -math.inf
+        for f in range(offsets.shape[1]):
+            ci = int(math.floor((points[i, 0] + offsets[o, f, 0]) / cell)) - ox
+            cj = int(math.floor((points[i, 1] + offsets[o, f, 1]) / cell)) - oy
+            for a in range(ci - 1, ci + 2):
+                if a < 0 or a >= nx:
+                    continue
+                for b in range(cj - 1, cj + 2):
+                    if b < 0 or b >= ny:
+                        continue
+                    c = a * ny + b
+                    lo, hi = starts[c], starts[c + 1]
+                    if lo == hi or heights[lo] > lim or heights[hi - 1] <= best:
+                        continue
+                    # the last height <= lim (ascending): a binary search
+                    while hi - lo > 1:
+                        mid = (lo + hi) // 2
+                        if heights[mid] <= lim:
+                            lo = mid
+                        else:
+                            hi = mid
+                    if heights[lo] > best:
+                        best = heights[lo]
+        out[i] = best
+
+
+def highest(points, orient, offsets, limit, table, cell: float) -> np.ndarray:
+    """(P,) :func:`highest_offsets` on a column table (:meth:`.scene.ColumnIndex.table`)."""
+    starts, heights, origin, nx, ny = table
+    out = np.empty(len(points))
+    if len(points):
+        highest_offsets(np.ascontiguousarray(points, np.float64),
+                        np.ascontiguousarray(orient, np.int64),
+                        np.ascontiguousarray(offsets, np.float64),
+                        np.ascontiguousarray(limit, np.float64), starts, heights,
+                        np.asarray(origin, np.int64), float(cell), int(nx), int(ny), out)
+    return out
