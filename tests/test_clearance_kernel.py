@@ -105,17 +105,24 @@ def test_bounded_nearest_answers_within_as_the_exact_nearest(seed):
         assert (exact <= lo).any() and (exact > hi).any() and (inner.any() or lo == hi)
 
 
+def _seated_pairs(seed: int):
+    """The sitting example's stool room, 3,000 placements (touching, near and in the air)
+    and the seated descriptor."""
+    room = it.prepare_scene(affordances.build("sitting-human").scene_object, 0.01, seed=0)
+    rng = np.random.default_rng(seed)
+    idx = rng.integers(0, len(room.points), 3000)
+    pts = room.points[idx] + rng.normal(0, 0.05, (3000, 3)) * (rng.random((3000, 1)) < 0.5)
+    orient = rng.integers(0, 8, len(idx))
+    return room, pts, orient, affordances.build_descriptor("sitting-human", seed=0,
+                                                           spacing=0.02)
+
+
 def test_contact_and_seat_fractions_on_the_grid_equal_the_reference():
     """The placement tests' contact and seat fractions through the bounded search equal
     those of the cKDTree's nearest samples, for the sitting and riding examples' pairs in a
     procedural room (touching, near and in the air)."""
 
-    room = it.prepare_scene(affordances.build("sitting-human").scene_object, 0.01, seed=0)
-    rng = np.random.default_rng(3)
-    idx = rng.integers(0, len(room.points), 3000)
-    pts = room.points[idx] + rng.normal(0, 0.05, (3000, 3)) * (rng.random((3000, 1)) < 0.5)
-    orient = rng.integers(0, 8, len(idx))
-    sit = affordances.build_descriptor("sitting-human", seed=0, spacing=0.02)
+    room, pts, orient, sit = _seated_pairs(3)
     tests = [(0.02, 90.0), (0.1, 90.0), (0.05, 90.0)]
     ref = contact_fractions(pts, orient, sit, tests, 8, room, None)
     fast = contact_fractions(pts, orient, sit, tests, 8, room, room.grid())
@@ -160,12 +167,7 @@ def test_a_cells_free_distance_is_what_its_box_keeps_from_every_sample(seed):
 def test_contact_with_an_angle_on_the_grid_equals_the_reference():
     """With an angle test the nearest sample within the largest distance is searched on the
     grid, and its normal read: the fractions equal those of the cKDTree's nearest samples."""
-    room = it.prepare_scene(affordances.build("sitting-human").scene_object, 0.01, seed=0)
-    rng = np.random.default_rng(5)
-    idx = rng.integers(0, len(room.points), 3000)
-    pts = room.points[idx] + rng.normal(0, 0.05, (3000, 3)) * (rng.random((3000, 1)) < 0.5)
-    orient = rng.integers(0, 8, len(idx))
-    sit = affordances.build_descriptor("sitting-human", seed=0, spacing=0.02)
+    room, pts, orient, sit = _seated_pairs(5)
     tests = [(0.02, 30.0), (0.05, 60.0), (0.03, 90.0)]
     ref = contact_fractions(pts, orient, sit, tests, 8, room, None)
     fast = contact_fractions(pts, orient, sit, tests, 8, room, room.grid())
