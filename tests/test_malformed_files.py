@@ -187,7 +187,8 @@ def test_tampered_descriptor_headers_load_or_give_one_line(riding, corner, tmp_p
         assert text.startswith(f"{target}: "), text
     out = tmp_path / "out"
     code = main(["detect", str(corner / "scene.ply"), str(target), "-o", str(out), "-q",
-                 "--sample-fraction", "0.02", "--top-k", "1", "--spacing", "0.03"])
+                 "--sample-fraction", "0.02", "--top-k", "1", "--spacing", "0.03",
+                 "--no-render"])
     err = capsys.readouterr().err
     event(f"loaded, detect exit {code}" if loaded else "refused")
     if loaded:

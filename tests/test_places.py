@@ -5,14 +5,16 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import trimesh
 
 import interaction_tensor as it
 from interaction_tensor.detection.places import group_places, place_cell, top_k
 from interaction_tensor.examples import demo
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.geometry.core import Geometry
-from interaction_tensor.geometry.sampling import (buried_samples, mean_spacing, mesh_area,
-                                                  sample_mesh)
+from interaction_tensor.geometry.sampling import (_Buckets, buried_samples, closed_windings,
+                                                  mean_spacing, mesh_area, sample_mesh,
+                                                  winding_numbers)
 from interaction_tensor.geometry.scene import thinned
 
 
@@ -250,3 +252,61 @@ def test_normals_of_a_sparse_bookcase_are_fitted_on_each_board_s_own_face():
     up = np.cos(np.radians(15))
     assert (np.abs(once[tops, 2]) > up).mean() < 0.45
     assert (estimate_normals(pts)[tops, 2] > up).mean() > 0.6
+
+
+def _closed_parts():
+    """Closed, consistently wound surfaces: a box (its vertical faces edge-on from above), a
+    sphere, a torus (a ray crosses it four times) and a box wound inwards."""
+    box = trimesh.creation.box(extents=(0.4, 0.3, 0.2))
+    sphere = trimesh.creation.icosphere(subdivisions=2, radius=0.25)
+    torus = trimesh.creation.torus(major_radius=0.3, minor_radius=0.08)
+    inward = trimesh.creation.box(extents=(0.2, 0.2, 0.2))
+    inward.faces = inward.faces[:, ::-1]
+    return [box, sphere, torus, inward]
+
+
+@pytest.mark.parametrize("k", range(4))
+def test_ray_windings_are_the_generalised_winding_numbers_off_the_surface(k):
+    mesh = _closed_parts()[k]
+    rng = np.random.default_rng(k)
+    lo, hi = mesh.bounds
+    free = rng.uniform(lo - 0.05, hi + 0.05, size=(3000, 3))
+    # points straight under the vertices (rays along edges) and on the surface itself
+    under = np.asarray(mesh.vertices) - [0, 0, 0.5]
+    on = trimesh.sample.sample_surface(mesh, 300, seed=k)[0]
+    pts = np.vstack([free, under, on, np.asarray(mesh.vertices)])
+    exact = winding_numbers(pts, mesh.vertices, mesh.faces)
+    fast = closed_windings(pts, mesh.vertices, mesh.faces)
+    off = np.abs(exact - np.round(exact)) < 1e-6                 # off the surface
+    assert off.sum() > 3000
+    assert np.allclose(fast[off], exact[off], atol=1e-6)
+    # on it (the ray's count is not trusted there), both say the same side of 0.5
+    assert np.array_equal(np.abs(fast) >= 0.5, np.abs(exact) >= 0.5)
+    assert set(np.round(exact[off]).astype(int)) >= ({0, -1} if k == 3 else {0, 1})
+
+
+def test_buried_samples_by_rays_are_those_by_winding_numbers():
+    ex = demo.build()
+    g = ex.scene
+    pts, nrm, faces = sample_mesh(g, 60000, 0, with_faces=True)
+    by_rays = buried_samples(g.vertices, g.faces, pts, nrm, faces, rays=True)
+    by_winding = buried_samples(g.vertices, g.faces, pts, nrm, faces, rays=False)
+    assert by_rays.sum() > 100
+    assert np.array_equal(by_rays, by_winding)
+
+
+def test_buckets_gather_every_point_in_a_box():
+    rng = np.random.default_rng(3)
+    pts = rng.uniform(-1, 2, size=(20000, 3))
+    buckets = _Buckets(pts, 0.1)
+    for lo, hi in [((0, 0, 0), (0.35, 0.2, 1.0)), ((-5, -5, -5), (5, 5, 5)),
+                   ((1.99, 1.99, 1.99), (3, 3, 3)), ((0.5, 0.5, 0.5), (0.5, 0.5, 0.5))]:
+        got = buckets.within(np.array(lo, float), np.array(hi, float))
+        assert len(np.unique(got)) == len(got)
+        inside = np.flatnonzero(((pts >= lo) & (pts <= hi)).all(axis=1))
+        assert np.isin(inside, got).all()
+        # a superset only by the cubes the box meets
+        near = ((pts >= np.array(lo) - 0.1) & (pts <= np.array(hi) + 0.1)).all(axis=1)
+        assert near[got].all()
+    assert len(buckets.within(np.array([5.0, 5, 5]), np.array([6.0, 6, 6]))) == 0
+    assert len(buckets.within(np.array([-6.0, -6, -6]), np.array([-5.0, -5, -5]))) == 0

@@ -75,7 +75,7 @@ def _pixels(png) -> np.ndarray:
 
 def _heat_pixels(a: np.ndarray) -> int:
     """Pixels in the heat-map hues (teal, green, yellow of the ramp; not grey, not red)."""
-    r, g, b = a[..., 0], a[..., 1], a[..., 2]
+    r, g = a[..., 0], a[..., 1]
     return int(((g - r > 25) & (g > 60)).sum())
 
 

@@ -232,7 +232,7 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                         # well
                         neighbour_cache=True if frac >= CACHE_AUTO_FRACTION else None))
                     cand = det.candidate_indices
-                    point, orient = det.pair_point, det.pair_orientation
+                    point = det.pair_point
                     acc = det.pairs.accepted
                     poses = None
                     da = det.pairs.decided_at[det.score_accepted]
@@ -265,8 +265,7 @@ def _run(files, names, st, icp_backend, out, log) -> EvalResult:
                     sub = capped_candidates(cand, cap, st.seed)
                     fn = naive if m == "Naive" else bisector_baseline
                     r = fn(scene, tensor, sub, backend=icp_backend, seed=st.seed)
-                    point, orient, score, acc, poses = (r.pair_point, r.pair_orientation,
-                                                        r.score, r.accepted, r.poses)
+                    point, score, acc, poses = r.pair_point, r.score, r.accepted, r.poses
                     secs = time.perf_counter() - t1
                     top, bottom = _pick(scene, point, score, acc, st.n_judged, radius)
                     top_accepted = acc[top]

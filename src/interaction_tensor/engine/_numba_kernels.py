@@ -477,7 +477,6 @@ def _gather(lx, ly, lz, h, r, sep, lattice, tol, pts, starts, occ, cb, ox, oy, o
     j1 = min(ny - 1, int(math.floor((cy + r - oy) / cell)))
     k0 = max(0, int(math.floor((cz - r - oz) / cell)))
     k1 = min(nz - 1, int(math.floor((cz + r - oz) / cell)))
-    mbx = (nx + cb - 1) // cb
     mby = (ny + cb - 1) // cb
     mbz = (nz + cb - 1) // cb
     bc = cb * cell

@@ -88,6 +88,66 @@ def grid_cells(points: np.ndarray, cell: float):
     return lin, lo, cell, dims
 
 
+class KNearest:
+    """Exact k-nearest-neighbour search of a point cloud on a uniform grid (a Numba kernel,
+    :func:`~interaction_tensor.geometry._normals.knn`): the points sorted into cubes of
+    edge ``cell`` once, each query's neighbours gathered from shells of cells around its
+    own until the k-th lies nearer than any cell not yet searched. With cells a little wider
+    than the k-th neighbour's distance on a surface (:func:`knn_cell`), one shell of 27
+    cells answers most queries; a cloud of very uneven density costs more shells where it
+    is sparse and more points per cell where it is dense, never a wrong answer; a query
+    farther than :data:`KNN_SHELLS` shells from its k-th neighbour (in the air, far from
+    the cloud) is answered by a k-d tree instead."""
+
+    def __init__(self, points: np.ndarray, cell: float):
+        points = np.ascontiguousarray(points, np.float64)
+        self._tree = None
+        lin, self.origin, self.cell, self.dims = grid_cells(points, cell)
+        self.order = np.argsort(lin, kind="stable")
+        lin = lin[self.order]
+        self.points = np.ascontiguousarray(points[self.order])
+        n_cells = int(np.prod(self.dims))
+        self.starts = np.empty(n_cells + 1, np.int32 if len(points) < 2 ** 31 else np.int64)
+        for c in range(0, n_cells + 1, 1 << 20):
+            self.starts[c:c + (1 << 20)] = np.searchsorted(
+                lin, np.arange(c, min(c + (1 << 20), n_cells + 1)))
+
+    def query(self, queries: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """((Q, k) distances, (Q, k) int64 indices into the points), nearest first, as
+        ``cKDTree.query(queries, k)`` gives them (equal distances in no set order)."""
+        from interaction_tensor.geometry._normals import knn
+
+        queries = np.ascontiguousarray(queries, np.float64)
+        k = int(min(k, len(self.points)))
+        d2 = np.empty((len(queries), k))
+        idx = np.empty((len(queries), k), np.int64)
+        nx, ny, nz = (int(v) for v in self.dims)
+        knn(self.points, self.starts, np.asarray(self.origin, np.float64), float(self.cell),
+            nx, ny, nz, queries, k, KNN_SHELLS, d2, idx)
+        dist = np.sqrt(d2)
+        far = np.flatnonzero(idx[:, 0] < 0)
+        if len(far):                              # far from every point: the k-d tree's
+            from scipy.spatial import cKDTree
+
+            if self._tree is None:
+                self._tree = cKDTree(self.points)
+            fd, fi = self._tree.query(queries[far], k=k)
+            dist[far], idx[far] = fd.reshape(len(far), k), fi.reshape(len(far), k)
+        return dist, self.order[idx]
+
+
+#: Shells of cells a :class:`KNearest` query searches before the k-d tree answers it.
+KNN_SHELLS = 6
+
+
+def knn_cell(spacing: float, k: int) -> float:
+    """A :class:`KNearest` cell edge (m) for ``k`` neighbours of a surface sampled
+    ``spacing`` apart: the k-th lies about sqrt(k / pi) spacings away, and a query's shell of
+    27 cells reaches at least a cell past its own, so cells of 0.65 sqrt(k) spacings (2.6 for
+    16) settle most queries in one shell."""
+    return 0.65 * np.sqrt(max(int(k), 1)) * float(spacing)
+
+
 def build_grid(points: np.ndarray, normals: np.ndarray, cell: float) -> Grid:
     """Sort ``points`` into cells of edge ``cell`` (enlarged if the grid would be too big).
 

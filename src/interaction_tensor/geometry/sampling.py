@@ -97,14 +97,18 @@ class MeshParts:
 
 def buried_samples(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
                    normals: np.ndarray, face_index: np.ndarray,
-                   parts: "MeshParts | None" = None) -> np.ndarray:
+                   parts: "MeshParts | None" = None, rays: bool = True) -> np.ndarray:
     """(N,) bool: the samples of a mesh that lie inside a closed part of it other than their
     own (a table top under a box standing on it, a floor under a wardrobe): no object can
     reach them. A part is a connected set of faces whose every edge two of its faces share
     (:class:`MeshParts`, worked out here unless given); a sample inside one (generalised
     winding number of the part at the sample lifted by :data:`BURIED_LIFT` along its
     normal, at least 0.5 in magnitude) is buried. Open parts (a scanned room's single
-    surface) bury nothing. Only the samples inside a part's bounding box are tested."""
+    surface) bury nothing. Only the samples inside a part's bounding box are tested. With
+    ``rays`` (and Numba), a part wound consistently is asked by the faces an upward ray
+    crosses (:func:`closed_windings`: its winding number off its surface, in a look-up of
+    the faces over the point), the generalised winding number only where the ray grazes an
+    edge."""
     faces = np.asarray(faces, np.int64)
     buried = np.zeros(len(points), bool)
     if len(faces) < 8:
@@ -122,21 +126,108 @@ def buried_samples(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
     np.maximum.at(hi, part, tri.max(axis=1))
     lifted = points + BURIED_LIFT * normals
     sample_part = part[face_index]
-    tree = cKDTree(lifted)
+    boxes = _Buckets(lifted)
     by_part = np.argsort(part, kind="stable")                   # each part's faces, sliced
     start = np.concatenate([[0], np.cumsum(size)])
     for c in np.flatnonzero(parts.closed & (size >= 4)):        # closed parts, one at a time
-        centre, reach = (lo[c] + hi[c]) / 2, np.linalg.norm(hi[c] - lo[c]) / 2
-        near = np.asarray(tree.query_ball_point(centre, reach), np.int64)
+        near = boxes.within(lo[c], hi[c])
         if not len(near):
             continue
         near = near[(sample_part[near] != c) & ~buried[near]
                     & (lifted[near] >= lo[c]).all(axis=1) & (lifted[near] <= hi[c]).all(axis=1)]
         if len(near):
-            w = winding_numbers(lifted[near], mesh.vertices,
-                                merged[by_part[start[c]:start[c + 1]]])
+            part_faces = merged[by_part[start[c]:start[c + 1]]]
+            w = (closed_windings(lifted[near], mesh.vertices, part_faces)
+                 if rays and parts.consistent[c] else
+                 winding_numbers(lifted[near], mesh.vertices, part_faces))
             buried[near[np.abs(w) >= 0.5]] = True
     return buried
+
+
+#: A closed part's faces are bucketed by plan in cells of about this many faces' share of
+#: its plan box (:func:`closed_windings`).
+RAY_FACES_PER_CELL = 4.0
+
+
+def closed_windings(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """(P,) winding numbers of ``points`` about a closed surface wound consistently (a
+    :class:`MeshParts` part): off the surface an integer, the sum of the signs (the normals'
+    z) of the faces an upward ray from the point crosses, found through a plan grid of the
+    faces (a Numba kernel); where the ray grazes an edge, or the point lies on a face, the
+    generalised winding number (:func:`winding_numbers`) instead. Without Numba, the
+    generalised winding number everywhere."""
+    try:
+        from interaction_tensor.geometry._winding import ray_windings
+    except ImportError:               # pragma: no cover - Numba is a dependency
+        return winding_numbers(points, vertices, faces)
+    points = np.ascontiguousarray(points, np.float64)
+    tri = np.ascontiguousarray(np.asarray(vertices, np.float64)[np.asarray(faces, np.int64)])
+    if len(points) == 0 or len(tri) == 0:
+        return np.zeros(len(points))
+    nz = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])[:, 2]
+    sign = np.sign(nz).astype(np.int64)
+    lo, hi = tri[:, :, :2].min(axis=1), tri[:, :, :2].max(axis=1)
+    origin = lo.min(axis=0)
+    extent = np.maximum(hi.max(axis=0) - origin, 1e-9)
+    cell = float(max(np.sqrt(extent.prod() * RAY_FACES_PER_CELL / len(tri)), 1e-6))
+    nx, ny = (int(v) for v in np.ceil(extent / cell) + 1)
+    i0, j0 = (np.floor((lo - origin) / cell).astype(np.int64)).T
+    i1, j1 = (np.floor((hi - origin) / cell).astype(np.int64)).T
+    ni, nj = i1 - i0 + 1, j1 - j0 + 1
+    count = ni * nj
+    owner = np.repeat(np.arange(len(tri)), count)
+    k = np.arange(len(owner)) - np.repeat(np.cumsum(count) - count, count)
+    cells = (i0[owner] + k // nj[owner]) * ny + (j0[owner] + k % nj[owner])
+    order = np.argsort(cells, kind="stable")
+    members = owner[order]
+    starts = np.searchsorted(cells[order], np.arange(nx * ny + 1)).astype(np.int64)
+    w = np.zeros(len(points), np.int64)
+    unsure = np.zeros(len(points), np.bool_)
+    ray_windings(points, tri, sign, starts, members, origin, cell, nx, ny, 1e-9, w, unsure)
+    out = w.astype(np.float64)
+    if unsure.any():
+        out[unsure] = winding_numbers(points[unsure], vertices, faces)
+    return out
+
+
+class _Buckets:
+    """Points sorted into cubes of :data:`BUCKET` (m): :meth:`within` gathers those in the
+    cubes a box meets (a superset of the points in the box) as index slices, without a
+    Python list per point."""
+
+    def __init__(self, points: np.ndarray, edge: float | None = None):
+        self.points = points
+        self.origin = points.min(axis=0) if len(points) else np.zeros(3)
+        span = (points.max(axis=0) - self.origin) if len(points) else np.zeros(3)
+        # about a million cubes at most: the edge grows for a huge extent
+        self.edge = float(max(edge or BUCKET, (np.prod(span + 1e-9) / 1e6) ** (1 / 3)))
+        self.dims = np.floor(span / self.edge).astype(np.int64) + 1
+        ijk = np.floor((points - self.origin) / self.edge).astype(np.int64)
+        key = (ijk[:, 0] * self.dims[1] + ijk[:, 1]) * self.dims[2] + ijk[:, 2]
+        self.order = np.argsort(key, kind="stable")
+        self.starts = np.searchsorted(key[self.order], np.arange(int(np.prod(self.dims)) + 1))
+
+    def within(self, lo, hi) -> np.ndarray:
+        """Indices (int64) of the points in the cubes that meet the box ``lo``-``hi``."""
+        a = np.clip(np.floor((np.asarray(lo) - self.origin) / self.edge).astype(np.int64),
+                    0, self.dims - 1)
+        b = np.clip(np.floor((np.asarray(hi) - self.origin) / self.edge).astype(np.int64),
+                    0, self.dims - 1)
+        if (np.asarray(hi) < self.origin).any() or (
+                np.asarray(lo) > self.origin + self.dims * self.edge).any():
+            return np.zeros(0, np.int64)
+        i, j = np.meshgrid(np.arange(a[0], b[0] + 1), np.arange(a[1], b[1] + 1), indexing="ij")
+        row = (i.ravel() * self.dims[1] + j.ravel()) * self.dims[2]
+        first, last = self.starts[row + a[2]], self.starts[row + b[2] + 1]
+        count = last - first
+        if not count.sum():
+            return np.zeros(0, np.int64)
+        idx = np.repeat(first - np.cumsum(count) + count, count) + np.arange(count.sum())
+        return self.order[idx]
+
+
+#: Edge (m) of the cubes :func:`buried_samples` sorts the lifted samples into.
+BUCKET = 0.1
 
 
 def outward_faces(vertices: np.ndarray, faces: np.ndarray,
@@ -243,15 +334,68 @@ def _least_spread(centred: np.ndarray) -> np.ndarray:
     return np.linalg.eigh(np.einsum("nki,nkj->nij", centred, centred))[1][:, :, 0]
 
 
+def _fits_numpy(points, queries, idx, slab):
+    """:func:`estimate_normals`' two plane fits of each query's neighbours ``idx`` (n, k),
+    in NumPy: the first plane's normal, the refitted one's and how many neighbours lie
+    within ``slab`` (m) of the first plane."""
+    nb = points[idx]
+    first = _least_spread(nb - nb.mean(axis=1, keepdims=True))
+    near = np.abs(np.einsum("nki,ni->nk", nb - queries[:, None], first)) <= slab
+    weight = near.astype(np.float64)
+    count = weight.sum(axis=1)
+    centre = np.einsum("nk,nki->ni", weight, nb) / np.maximum(count, 1.0)[:, None]
+    again = _least_spread((nb - centre[:, None]) * weight[..., None])
+    return first, again, count
+
+
+#: :func:`estimate_normals`' closed-form eigen-solver hands a matrix to NumPy's where its
+#: two least eigenvalues are nearer each other than this share of its largest (the
+#: closed form's vector loses digits as they meet; a line's neighbourhood).
+EIGEN_GAP = 1e-4
+
+
+def _least_eigenvectors(cov: np.ndarray) -> np.ndarray:
+    """(n, 3) unit eigenvectors of the least eigenvalues of (n, 3, 3) symmetric matrices:
+    in closed form (a Numba kernel), NumPy's ``eigh`` where the closed form is unsure
+    (:data:`EIGEN_GAP`)."""
+    from interaction_tensor.geometry._normals import least_eigenvectors
+
+    out = np.empty((len(cov), 3))
+    unsure = np.empty(len(cov), np.bool_)
+    least_eigenvectors(cov, EIGEN_GAP, out, unsure)
+    if unsure.any():
+        out[unsure] = np.linalg.eigh(cov[unsure])[1][:, :, 0]
+    return out
+
+
+def _fits_numba(points, queries, idx, slab):
+    """:func:`_fits_numpy` with the scatter matrices summed by Numba kernels (no (n, k, 3)
+    temporaries) and their least eigenvectors in closed form (:func:`_least_eigenvectors`;
+    NumPy's ``eigh`` within 1e-12 rad where sure, itself elsewhere)."""
+    from interaction_tensor.geometry import _normals
+
+    cov = np.empty((len(idx), 3, 3))
+    _normals.scatter(points, idx, cov)
+    first = _least_eigenvectors(cov)
+    count = np.empty(len(idx), np.int64)
+    _normals.refit_scatter(points, np.ascontiguousarray(queries), idx, first, slab, cov, count)
+    return first, _least_eigenvectors(cov), count
+
+
 def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = None,
-                     progress: bool = False, at: np.ndarray | None = None) -> np.ndarray:
+                     progress: bool = False, at: np.ndarray | None = None,
+                     reference: bool = False, spacing: float | None = None) -> np.ndarray:
     """Unit normals of a point cloud by PCA of the ``k`` nearest neighbours, fitted again
     with those near the first plane through the point (a sparse cloud's neighbourhood
     reaches past a narrow board's top to its edge and underside: at 3 cm, 37 % of a
     furnished room's up-facing points came out within 15 degrees of up with one fit, 71 %
     with two), 50,000 points at a time (with ``progress``, a progress bar advanced by
     each); with ``at`` (indices), at those points only, their neighbours taken from the
-    whole cloud.
+    whole cloud. Given the cloud's ``spacing`` (m), the neighbours are found on a grid
+    (:class:`~interaction_tensor.geometry.grid.KNearest`; a k-d tree where the cloud's
+    extent would make its cells more than twice as wide), and the
+    scatter matrices are summed by Numba kernels; ``reference``: the k-d tree and NumPy,
+    the path the fast one is tested against.
 
     The sign is chosen so that normals point to +Z where they are not horizontal
     (normals of clouds are unoriented; callers that need a side use their own rule).
@@ -260,8 +404,21 @@ def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = Non
     """
     points = np.asarray(points, dtype=np.float64)
     k = int(min(k, len(points)))
-    tree = cKDTree(points) if tree is None else tree
     queries = points if at is None else points[np.asarray(at, np.int64)]
+    search = None
+    if spacing and spacing > 0 and not reference:
+        from interaction_tensor.geometry.grid import KNearest, knn_cell
+
+        grid = KNearest(points, knn_cell(spacing, k))
+        # a grid whose cells had to grow (a vast extent) would hold too many points a cell
+        if grid.cell <= 2 * knn_cell(spacing, k):
+            search = grid.query
+        del grid
+    if search is None:
+        tree = cKDTree(points) if tree is None else tree
+
+        def search(q, k):
+            return tree.query(q, k=k, workers=-1)
     normals = np.empty_like(queries)
     step = 50_000  # bounds the (step, k, 3) neighbourhood arrays (about 40 MB)
     bar = None
@@ -270,22 +427,17 @@ def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = Non
 
         bar = tqdm(total=len(queries), unit="pt", unit_scale=True, desc="normals",
                    leave=False)
+    fit = _fits_numpy if reference else _fits_numba
     try:
         for start in range(0, len(queries), step):
             sl = slice(start, start + step)
-            dist, idx = tree.query(queries[sl], k=k, workers=-1)
-            nb = points[idx]
-            first = _least_spread(nb - nb.mean(axis=1, keepdims=True))
-            # again with the neighbours near the point's own plane: a narrow board's top
-            # first fitted with its edge and underside, whose points lie off that plane
-            off = np.abs(np.einsum("nki,ni->nk", nb - queries[sl][:, None], first))
-            near = off <= NORMAL_REFIT_SLAB * float(np.median(dist[:, min(1, k - 1)]))
-            weight = near.astype(np.float64)
-            count = weight.sum(axis=1, keepdims=True)
-            centre = np.einsum("nk,nki->ni", weight, nb) / np.maximum(count, 1.0)
-            again = _least_spread((nb - centre[:, None]) * weight[..., None])
-            refit = count[:, 0] >= NORMAL_REFIT_MIN
-            normals[sl] = np.where(refit[:, None], again, first)
+            dist, idx = search(queries[sl], k)
+            dist, idx = dist.reshape(-1, k), np.asarray(idx, np.int64).reshape(-1, k)
+            # the first fit's neighbours near the point's own plane, fitted again: a narrow
+            # board's top first fitted with its edge and underside, off that plane
+            slab = NORMAL_REFIT_SLAB * float(np.median(dist[:, min(1, k - 1)]))
+            first, again, count = fit(points, queries[sl], idx, slab)
+            normals[sl] = np.where((count >= NORMAL_REFIT_MIN)[:, None], again, first)
             if bar is not None:
                 bar.update(len(idx))
     finally:

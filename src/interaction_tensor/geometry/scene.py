@@ -438,13 +438,14 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
                      f"to {len(keep):,} at the descriptor's {1000 * spacing:.0f} mm spacing "
                      "(give a smaller spacing to keep more)")
         # normals from the whole cloud's neighbourhoods: a thin board keeps its two faces
-        normals = (estimate_normals(points, tree=tree, progress=progress, at=keep)
+        normals = (estimate_normals(points, tree=tree, progress=progress, at=keep,
+                                    spacing=measured)
                    if normals is None else normals[keep])
         points = points[keep]
         tree = cKDTree(points)
         measured = mean_spacing(points, tree)
     if normals is None:
-        normals = estimate_normals(points, tree=tree, progress=progress)
+        normals = estimate_normals(points, tree=tree, progress=progress, spacing=measured)
     else:
         length = np.linalg.norm(normals, axis=1, keepdims=True)
         normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
