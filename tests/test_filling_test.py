@@ -79,10 +79,17 @@ def test_the_example_fills_and_a_mug_under_a_shelf_does_not(filling, kitchen):
                           kitchen.tree, kitchen.spacing)
 
 
-def test_detection_finds_the_tap_and_not_the_shelf(filling, kitchen):
+@pytest.fixture(scope="module")
+def with_and_without(filling, kitchen):
+    """The kitchen's detections with the tap test and without it."""
     _, tensor = filling
-    det = it.detect(kitchen, tensor, it.DetectSettings(top_k=5))
-    off = it.detect(kitchen, tensor, it.DetectSettings(top_k=5, skip_tests=("fills",)))
+    return (it.detect(kitchen, tensor, it.DetectSettings(top_k=5)),
+            it.detect(kitchen, tensor, it.DetectSettings(top_k=5, skip_tests=("fills",))))
+
+
+@pytest.mark.xdist_group("filling-kitchen")
+def test_detection_finds_the_tap_and_not_the_shelf(with_and_without):
+    det, off = with_and_without
     assert det.stats["filling_test"] == "on" and det.stats["pairs_not_filling"] > 0
     assert off.stats["filling_test"] == "off (settings)"
     ox, oy, _ = shapes.TAP_OUTLET
@@ -119,13 +126,12 @@ def test_the_tap_test_of_every_pair_matches_its_reference(filling, kitchen):
     assert 50 < fast.sum() < len(openings) - 2000 and not fast[-1]
 
 
-def test_every_pair_is_asked_for_a_tap_before_its_score(filling, kitchen):
-    _, tensor = filling
-    det = it.detect(kitchen, tensor, it.DetectSettings(top_k=5))
+@pytest.mark.xdist_group("filling-kitchen")
+def test_every_pair_is_asked_for_a_tap_before_its_score(with_and_without):
+    det, off = with_and_without
     st = det.stats
     assert st["pairs_failing_tap"] > 0.9 * st["pairs"]
     assert st["pairs_scored"] < 0.05 * st["pairs"]
-    off = it.detect(kitchen, tensor, it.DetectSettings(top_k=5, skip_tests=("fills",)))
     assert off.stats["pairs_failing_tap"] == 0
 
 
