@@ -12,9 +12,15 @@ from interaction_tensor.detection.places import group_places, place_cell, top_k
 from interaction_tensor.examples import demo
 from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.geometry.core import Geometry
-from interaction_tensor.geometry.sampling import (_Buckets, buried_samples, closed_windings,
-                                                  mean_spacing, mesh_area, sample_mesh,
-                                                  winding_numbers)
+from interaction_tensor.geometry.grid import KNearest
+from interaction_tensor.geometry.sampling import (
+    buried_samples,
+    closed_windings,
+    mean_spacing,
+    mesh_area,
+    sample_mesh,
+    winding_numbers,
+)
 from interaction_tensor.geometry.scene import thinned
 
 
@@ -298,7 +304,7 @@ def test_buried_samples_by_rays_are_those_by_winding_numbers():
 def test_buckets_gather_every_point_in_a_box():
     rng = np.random.default_rng(3)
     pts = rng.uniform(-1, 2, size=(20000, 3))
-    buckets = _Buckets(pts, 0.1)
+    buckets = KNearest(pts, 0.1)
     for lo, hi in [((0, 0, 0), (0.35, 0.2, 1.0)), ((-5, -5, -5), (5, 5, 5)),
                    ((1.99, 1.99, 1.99), (3, 3, 3)), ((0.5, 0.5, 0.5), (0.5, 0.5, 0.5))]:
         got = buckets.within(np.array(lo, float), np.array(hi, float))

@@ -89,10 +89,10 @@ def grid_cells(points: np.ndarray, cell: float):
 
 
 class KNearest:
-    """Exact k-nearest-neighbour search of a point cloud on a uniform grid (a Numba kernel,
-    :func:`~interaction_tensor.geometry._normals.knn`): the points sorted into cubes of
-    edge ``cell`` once, each query's neighbours gathered from shells of cells around its
-    own until the k-th lies nearer than any cell not yet searched. With cells a little wider
+    """Points sorted into the cells of a uniform grid once: the points in a box
+    (:meth:`within`), and exact k-nearest-neighbour search (a Numba kernel,
+    :func:`~interaction_tensor.geometry._normals.knn`): each query's neighbours gathered
+    from shells of cells around its own until the k-th lies nearer than any cell not yet searched. With cells a little wider
     than the k-th neighbour's distance on a surface (:func:`knn_cell`), one shell of 27
     cells answers most queries; a cloud of very uneven density costs more shells where it
     is sparse and more points per cell where it is dense, never a wrong answer; a query
@@ -134,6 +134,24 @@ class KNearest:
             fd, fi = self._tree.query(queries[far], k=k)
             dist[far], idx[far] = fd.reshape(len(far), k), fi.reshape(len(far), k)
         return dist, self.order[idx]
+
+    def within(self, lo, hi) -> np.ndarray:
+        """(int64) indices of the points in the cells that meet the box ``lo``-``hi``: a
+        superset of those in the box, gathered as slices of the cell order (no list a
+        point)."""
+        lo, hi = np.asarray(lo, float), np.asarray(hi, float)
+        if (hi < self.origin).any() or (lo > self.origin + self.dims * self.cell).any():
+            return np.zeros(0, np.int64)
+        a = np.clip(np.floor((lo - self.origin) / self.cell).astype(np.int64), 0, self.dims - 1)
+        b = np.clip(np.floor((hi - self.origin) / self.cell).astype(np.int64), 0, self.dims - 1)
+        i, j = np.meshgrid(np.arange(a[0], b[0] + 1), np.arange(a[1], b[1] + 1), indexing="ij")
+        row = (i.ravel() * self.dims[1] + j.ravel()) * self.dims[2]
+        first = self.starts[row + a[2]].astype(np.int64)
+        count = self.starts[row + b[2] + 1] - first
+        if not count.sum():
+            return np.zeros(0, np.int64)
+        idx = np.repeat(first - np.cumsum(count) + count, count) + np.arange(count.sum())
+        return self.order[idx]
 
 
 #: Shells of cells a :class:`KNearest` query searches before the k-d tree answers it.

@@ -9,6 +9,7 @@ from scipy.spatial import cKDTree
 
 from interaction_tensor.errors import InputError
 from interaction_tensor.geometry.core import Geometry
+from interaction_tensor.geometry.grid import KNearest, knn_cell
 
 
 def mesh_area(geometry: Geometry) -> float:
@@ -111,7 +112,7 @@ def buried_samples(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
     edge."""
     faces = np.asarray(faces, np.int64)
     buried = np.zeros(len(points), bool)
-    if len(faces) < 8:
+    if len(faces) < 8 or len(points) == 0:
         return buried
     parts = parts or MeshParts(vertices, faces)
     mesh, part, n_parts = parts.mesh, parts.part, parts.n_parts
@@ -126,7 +127,7 @@ def buried_samples(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray,
     np.maximum.at(hi, part, tri.max(axis=1))
     lifted = points + BURIED_LIFT * normals
     sample_part = part[face_index]
-    boxes = _Buckets(lifted)
+    boxes = KNearest(lifted, BUCKET)
     by_part = np.argsort(part, kind="stable")                   # each part's faces, sliced
     start = np.concatenate([[0], np.cumsum(size)])
     for c in np.flatnonzero(parts.closed & (size >= 4)):        # closed parts, one at a time
@@ -190,43 +191,8 @@ def closed_windings(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray)
     return out
 
 
-class _Buckets:
-    """Points sorted into cubes of :data:`BUCKET` (m): :meth:`within` gathers those in the
-    cubes a box meets (a superset of the points in the box) as index slices, without a
-    Python list per point."""
-
-    def __init__(self, points: np.ndarray, edge: float | None = None):
-        self.points = points
-        self.origin = points.min(axis=0) if len(points) else np.zeros(3)
-        span = (points.max(axis=0) - self.origin) if len(points) else np.zeros(3)
-        # about a million cubes at most: the edge grows for a huge extent
-        self.edge = float(max(edge or BUCKET, (np.prod(span + 1e-9) / 1e6) ** (1 / 3)))
-        self.dims = np.floor(span / self.edge).astype(np.int64) + 1
-        ijk = np.floor((points - self.origin) / self.edge).astype(np.int64)
-        key = (ijk[:, 0] * self.dims[1] + ijk[:, 1]) * self.dims[2] + ijk[:, 2]
-        self.order = np.argsort(key, kind="stable")
-        self.starts = np.searchsorted(key[self.order], np.arange(int(np.prod(self.dims)) + 1))
-
-    def within(self, lo, hi) -> np.ndarray:
-        """Indices (int64) of the points in the cubes that meet the box ``lo``-``hi``."""
-        a = np.clip(np.floor((np.asarray(lo) - self.origin) / self.edge).astype(np.int64),
-                    0, self.dims - 1)
-        b = np.clip(np.floor((np.asarray(hi) - self.origin) / self.edge).astype(np.int64),
-                    0, self.dims - 1)
-        if (np.asarray(hi) < self.origin).any() or (
-                np.asarray(lo) > self.origin + self.dims * self.edge).any():
-            return np.zeros(0, np.int64)
-        i, j = np.meshgrid(np.arange(a[0], b[0] + 1), np.arange(a[1], b[1] + 1), indexing="ij")
-        row = (i.ravel() * self.dims[1] + j.ravel()) * self.dims[2]
-        first, last = self.starts[row + a[2]], self.starts[row + b[2] + 1]
-        count = last - first
-        if not count.sum():
-            return np.zeros(0, np.int64)
-        idx = np.repeat(first - np.cumsum(count) + count, count) + np.arange(count.sum())
-        return self.order[idx]
-
-
-#: Edge (m) of the cubes :func:`buried_samples` sorts the lifted samples into.
+#: Edge (m) of the cells :func:`buried_samples` sorts the lifted samples into (a
+#: :class:`~interaction_tensor.geometry.grid.KNearest`).
 BUCKET = 0.1
 
 
@@ -407,8 +373,6 @@ def estimate_normals(points: np.ndarray, k: int = 16, tree: cKDTree | None = Non
     queries = points if at is None else points[np.asarray(at, np.int64)]
     search = None
     if spacing and spacing > 0 and not reference:
-        from interaction_tensor.geometry.grid import KNearest, knn_cell
-
         grid = KNearest(points, knn_cell(spacing, k))
         # a grid whose cells had to grow (a vast extent) would hold too many points a cell
         if grid.cell <= 2 * knn_cell(spacing, k):
