@@ -4,6 +4,13 @@ from __future__ import annotations
 
 import os
 
+# Each xdist worker gets its share of the cores for Numba's threads (all of them without
+# xdist): two workers each running two threads on 2 cores only wait for each other.
+# Before Numba is first imported, which reads the setting once.
+if "NUMBA_NUM_THREADS" not in os.environ and os.environ.get("PYTEST_XDIST_WORKER_COUNT"):
+    os.environ["NUMBA_NUM_THREADS"] = str(max(
+        1, (os.cpu_count() or 1) // int(os.environ["PYTEST_XDIST_WORKER_COUNT"])))
+
 import pytest
 from hypothesis import settings as _hypothesis_settings
 

@@ -83,7 +83,7 @@ def test_a_sixth_affordance_goes_through_training_and_detection(stacking, tmp_pa
     room = parts_mesh([box_part("floor", (1.0, 0.0, -0.025), (4.0, 2.0, 0.05)),
                        box_part("low", (0.0, 0.0, 0.2), (0.6, 0.6, 0.4)),
                        box_part("high", (2.0, 0.0, 0.45), (0.5, 0.5, 0.9))])
-    result = it.detect(room, tensor, sample_fraction=0.3, top_k=6)
+    result = it.detect(room, tensor, sample_fraction=0.12, top_k=6)
     tops = result.positions[:, 2]
     on = np.isclose(tops[:, None], [0.0, 0.4, 0.9], atol=0.01)
     assert len(tops) >= 3 and on.any(axis=1).all() and on.any(axis=0).sum() >= 2, tops

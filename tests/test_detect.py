@@ -87,10 +87,15 @@ def test_candidates_without_scoring_are_detections_candidates(corner_tensor):
 
 @pytest.fixture(scope="module")
 def scored_setup(corner_tensor):
-    scene_geometry, _ = moved_corner_scene(np.pi / 2, np.array([0.5, 0.5, 0.0]))
+    shift = np.array([0.5, 0.5, 0.0])
+    scene_geometry, rot = moved_corner_scene(np.pi / 2, shift)
     scene = it.prepare_scene(scene_geometry, 0.01, seed=2)
+    # samples anywhere, and the nearest to where the example's reference point went (pairs
+    # that pass among them)
     rng = np.random.default_rng(0)
-    idx = rng.choice(len(scene), 500, replace=False)
+    home = rot @ corner_tensor.reference_point + shift
+    near = np.argsort(np.linalg.norm(scene.points - home, axis=1))[:60]
+    idx = np.union1d(rng.choice(len(scene), 200, replace=False), near)
     idx = idx[candidate_mask(scene.normals[idx], corner_tensor.affordance_normal, 15, False)]
     pp = np.repeat(idx, 8)
     po = np.tile(np.arange(8), len(idx))

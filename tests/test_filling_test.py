@@ -87,7 +87,6 @@ def with_and_without(filling, kitchen):
             it.detect(kitchen, tensor, it.DetectSettings(top_k=5, skip_tests=("fills",))))
 
 
-@pytest.mark.xdist_group("filling-kitchen")
 def test_detection_finds_the_tap_and_not_the_shelf(with_and_without):
     det, off = with_and_without
     assert det.stats["filling_test"] == "on" and det.stats["pairs_not_filling"] > 0
@@ -126,7 +125,6 @@ def test_the_tap_test_of_every_pair_matches_its_reference(filling, kitchen):
     assert 50 < fast.sum() < len(openings) - 2000 and not fast[-1]
 
 
-@pytest.mark.xdist_group("filling-kitchen")
 def test_every_pair_is_asked_for_a_tap_before_its_score(with_and_without):
     det, off = with_and_without
     st = det.stats

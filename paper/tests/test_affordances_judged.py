@@ -47,7 +47,7 @@ def test_the_judge_applies_a_new_affordances_rule(stacking):
                        box_part("high", (2.0, 0.0, 0.45), (0.5, 0.5, 0.9))])
     scene = JudgeScene(room)
     tensor = build_descriptor("stacking-box", example=ex)
-    result = it.detect(room, tensor, sample_fraction=0.3, top_k=4)
+    result = it.detect(room, tensor, sample_fraction=0.12, top_k=4)
     assert len(result.predictions) >= 2
     for pose in result.poses:
         v = judge.judge(scene, pose)

@@ -191,7 +191,7 @@ def test_evaluate_merge_equals_one_run(tmp_path, capsys):
 
     s1 = shared_file("scenes/office-desk1.ply")
     s2 = shared_file("scenes/office-desk5.ply")
-    common = ["--examples", "placing-bowl", "--test-points", "400", "--methods",
+    common = ["--examples", "placing-bowl", "--test-points", "150", "--methods",
               "iT-weighted,Naive", "--max-candidates", "6", "--seed", "0", "--quiet"]
     for name, scenes in (("a", [s1]), ("b", [s2]), ("ab", [s1, s2])):
         assert main(["paper", "evaluate", "--scenes", *map(str, scenes), "-o",

@@ -16,6 +16,8 @@ table top, a wall or a sofa is not.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 FCL_HINT = "pip install python-fcl (a dependency of interaction-tensor)"
@@ -118,13 +120,22 @@ class MeshCollider:
 
 
 class Body:
-    """A query object part as a BVH of its triangles, in its own (training) frame."""
+    """A query object part as a BVH of its triangles, in its own (training) frame. The BVH is
+    built on the first test that needs it: a detection whose pairs all fail earlier tests (a
+    person's descriptor on a scene with no seat) never pays for it."""
 
     def __init__(self, vertices: np.ndarray, faces: np.ndarray):
-        fcl = _fcl()
+        _fcl()                              # a missing python-fcl is said here, not mid-run
         self.vertices = np.asarray(vertices, float)
         self.faces = np.asarray(faces, np.int64)
-        self.object = fcl.CollisionObject(_bvh(self.vertices, self.faces), fcl.Transform())
+        if len(self.faces) == 0:
+            raise ValueError("a collision model needs at least one triangle")
+
+    @functools.cached_property
+    def object(self):
+        """The python-fcl collision object of the triangles."""
+        fcl = _fcl()
+        return fcl.CollisionObject(_bvh(self.vertices, self.faces), fcl.Transform())
 
     def __len__(self) -> int:
         return len(self.faces)

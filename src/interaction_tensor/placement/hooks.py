@@ -179,13 +179,15 @@ def fits(opening: Opening, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
     inside = r <= opening.inside
     if not inside.any():
         return True
+    past = r > opening.limit[direction_bins(x, z)] + margin
+    if int(past.sum()) < least:          # too few past the limit, however they are connected
+        return True
     pairs = cKDTree(d).query_pairs(link, output_type="ndarray")
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
                        shape=(len(d), len(d)))
     _, label = connected_components(graph, directed=False)
     through = np.isin(label, np.unique(label[inside]))
-    out = r[through] > opening.limit[direction_bins(x[through], z[through])] + margin
-    return int(out.sum()) < least
+    return int((past & through).sum()) < least
 
 
 def bottom(samples: np.ndarray, band: float = FREE_BAND) -> np.ndarray:
