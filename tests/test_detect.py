@@ -19,7 +19,7 @@ from interaction_tensor.examples.procedural import box_part, parts_mesh
 from interaction_tensor.geometry.grid import FAR_BLOCK, FAR_CELLS, build_grid
 from interaction_tensor.geometry.scene import hot_copy
 
-from support import corner_example
+from support import corner_example, parallel_kernels_run
 
 
 def moved_corner_scene(angle, shift):
@@ -66,6 +66,27 @@ def test_detection_is_deterministic(corner_tensor):
         runs.append(r)
     np.testing.assert_array_equal(runs[0].pairs.score, runs[1].pairs.score)
     np.testing.assert_array_equal(runs[0].candidate_indices, runs[1].candidate_indices)
+
+
+def test_detection_decides_alike_in_any_number_of_threads(tmp_path):
+    """Numba's parallel kernels (normals, placement tests, scoring, the neighbour cache) in
+    this process's threads (one each on a 2-core machine running tests in 2 workers) and
+    in three, which splits their loops otherwise: the same normals, pairs and top k."""
+    import subprocess
+    import sys
+
+    parallel_kernels_run(tmp_path / "here.npz")
+    env = dict(os.environ, NUMBA_NUM_THREADS="3",
+               PYTHONPATH=os.pathsep.join([os.path.dirname(__file__),
+                                           os.environ.get("PYTHONPATH", "")]))
+    code = ("import sys, support; support.parallel_kernels_run(sys.argv[1])")
+    subprocess.run([sys.executable, "-c", code, str(tmp_path / "threads.npz")], env=env,
+                   check=True, timeout=600)
+    here, threads = np.load(tmp_path / "here.npz"), np.load(tmp_path / "threads.npz")
+    assert sorted(here.files) == sorted(threads.files)
+    assert here["mesh-False-accepted"].any() and here["cloud-False-accepted"].any()
+    for name in here.files:
+        assert np.array_equal(here[name], threads[name]), name
 
 
 def test_candidates_without_scoring_are_detections_candidates(corner_tensor):
@@ -226,7 +247,7 @@ def test_settings_are_validated():
 
 
 def test_detect_many_equals_one_at_a_time(corner_tensor):
-    from support import corner_example
+    from support import corner_example, parallel_kernels_run
     q, s = corner_example()
     # a second descriptor: the same interaction with the box turned into a 'down' tensor
     other = it.InteractionTensor.fit(q, s, "corner-box-2", it.TrainSettings(query_points=2000, seed=4))

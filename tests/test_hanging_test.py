@@ -182,6 +182,28 @@ def test_a_plane_cuts_a_box_along_its_outline():
     assert not len(cut.segments((0.0, 0.5, 0.5), (0.0, 1.0, 0.0), reach=1.0))
 
 
+def test_a_cut_visits_the_faces_near_it_as_every_face_s_box_says():
+    """The faces indexed by the cubes their boxes meet give a query exactly the faces whose
+    boxes come within its reach, as testing every face does: small and large triangles
+    (a floor's, listed apart), queries inside, across and outside the mesh, of any reach."""
+    from interaction_tensor.geometry.sections import MeshSections
+
+    rng = np.random.default_rng(5)
+    small = rng.uniform(-1, 1, (400, 1, 3)) + rng.normal(scale=0.05, size=(400, 3, 3))
+    large = rng.uniform(-3, 3, (6, 3, 3))
+    tri = np.concatenate([small, large])
+    cut = MeshSections(tri.reshape(-1, 3), np.arange(len(tri) * 3).reshape(-1, 3), cell=0.15)
+    assert len(cut.large) >= 1
+    for centre in rng.uniform(-2.5, 2.5, (60, 3)):
+        for reach in (0.01, 0.1, 0.3, 2.0):
+            brute = np.flatnonzero(((cut.lo <= centre + reach)
+                                    & (cut.hi >= centre - reach)).all(axis=1))
+            assert np.array_equal(cut.near_faces(centre, reach), brute), (centre, reach)
+    empty = MeshSections(np.zeros((0, 3)), np.zeros((0, 3), np.int64))
+    assert not len(empty.near_faces(np.zeros(3), 0.3))
+    assert not len(empty.segments(np.zeros(3), (0.0, 0.0, 1.0), 0.3))
+
+
 def test_on_a_mesh_a_thick_top_under_the_hook_does_not_fit_however_it_was_sampled(hanging):
     """A 10 cm wall's top under the hook: its samples in a thin slab leave gaps of several
     centimetres, where it looks like a rod; the mesh's exact cut does not."""

@@ -5,9 +5,18 @@ from __future__ import annotations
 
 import numpy as np
 
+#: The edge (m) of the cubes faces are indexed by (hanging's fit test follows a cut 30 cm
+#: out from a hook: a few cubes a query)...
+CELL = 0.15
+#: ... the most cubes a face is listed in (larger ones are tested on every query)...
+MAX_CELLS = 64
+#: ... and the most cubes a query visits (a larger one tests every face's box).
+MAX_QUERY_CELLS = 512
+
 
 class MeshSections:
-    """A triangle mesh (the scene's, built once) cut by planes on demand.
+    """A triangle mesh (the scene's, built once) cut by planes on demand; its faces indexed
+    by the cubes their bounding boxes meet, so that a cut visits the faces near it only.
 
     Parameters
     ----------
@@ -15,12 +24,67 @@ class MeshSections:
     faces : (F, 3) int
     """
 
-    def __init__(self, vertices: np.ndarray, faces: np.ndarray):
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, cell: float = CELL):
         self.vertices = np.asarray(vertices, np.float64)
         self.faces = np.asarray(faces, np.int64)
         tri = self.vertices[self.faces]
         self.lo = tri.min(axis=1)
         self.hi = tri.max(axis=1)
+        self._index(cell)
+
+    def _index(self, cell: float) -> None:
+        """The faces by the cubes of edge ``cell`` (m) their bounding boxes meet, as sorted
+        cube keys and a face list (CSR); a face whose box meets more than
+        :data:`MAX_CELLS` cubes (a floor's large triangle) is in :attr:`large` instead."""
+        self.cell = float(cell)
+        if not len(self.faces):
+            self.origin = np.zeros(3)
+            self.dims = np.ones(3, np.int64)
+            self.keys, self.starts = np.zeros(0, np.int64), np.zeros(1, np.int64)
+            self.members, self.large = np.zeros(0, np.int64), np.zeros(0, np.int64)
+            return
+        self.origin = self.lo.min(axis=0)
+        a = np.floor((self.lo - self.origin) / cell).astype(np.int64)
+        b = np.floor((self.hi - self.origin) / cell).astype(np.int64)
+        self.dims = b.max(axis=0) + 1
+        span = b - a + 1
+        count = span.prod(axis=1)
+        small = np.flatnonzero(count <= MAX_CELLS)
+        self.large = np.flatnonzero(count > MAX_CELLS)
+        # every (face, cube) of the small faces: the face's corner cube plus its offsets
+        n = count[small]
+        face = np.repeat(small, n)
+        k = np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)
+        sy, sz = span[face, 1], span[face, 2]
+        ijk = a[face] + np.column_stack([k // (sy * sz), (k // sz) % sy, k % sz])
+        key = (ijk[:, 0] * self.dims[1] + ijk[:, 1]) * self.dims[2] + ijk[:, 2]
+        order = np.lexsort((face, key))
+        key, self.members = key[order], face[order]
+        first = np.r_[True, key[1:] != key[:-1]]
+        self.keys = key[first]
+        self.starts = np.r_[np.flatnonzero(first), len(key)]
+
+    def near_faces(self, centre, reach: float) -> np.ndarray:
+        """The faces (ascending) whose bounding box comes within ``reach`` (m) of ``centre``
+        along each axis: those of the cubes the query's box meets, tested exactly."""
+        c = np.asarray(centre, float)
+        a = np.maximum(np.floor((c - reach - self.origin) / self.cell), 0).astype(np.int64)
+        b = np.minimum(np.floor((c + reach - self.origin) / self.cell),
+                       self.dims - 1).astype(np.int64)
+        if not (a <= b).all() or not len(self.keys):
+            cand = self.large
+        elif np.prod(b - a + 1) > MAX_QUERY_CELLS:   # a query as large as the scene
+            return np.flatnonzero(((self.lo <= c + reach) & (self.hi >= c - reach)).all(axis=1))
+        else:
+            g = np.meshgrid(*(np.arange(a[i], b[i] + 1) for i in range(3)), indexing="ij")
+            key = ((g[0] * self.dims[1] + g[1]) * self.dims[2] + g[2]).ravel()
+            at = np.minimum(np.searchsorted(self.keys, key), len(self.keys) - 1)
+            at = at[self.keys[at] == key]                   # the cubes that hold faces
+            lo, n = self.starts[at], self.starts[at + 1] - self.starts[at]
+            pick = np.repeat(lo - np.cumsum(n) + n, n) + np.arange(int(n.sum()))
+            cand = np.unique(np.concatenate([self.members[pick], self.large]))
+        ok = ((self.lo[cand] <= c + reach) & (self.hi[cand] >= c - reach)).all(axis=1)
+        return cand[ok]
 
     def segments(self, centre, normal, reach: float) -> np.ndarray:
         """(K, 2, 3) the segments where the plane through ``centre`` (3,) normal to
@@ -28,7 +92,7 @@ class MeshSections:
         ``centre`` (a face lying in the plane cuts nothing)."""
         c = np.asarray(centre, float)
         n = np.asarray(normal, float) / np.linalg.norm(normal)
-        near = np.flatnonzero(((self.lo <= c + reach) & (self.hi >= c - reach)).all(axis=1))
+        near = self.near_faces(c, reach)
         if not len(near):
             return np.zeros((0, 2, 3))
         tri = self.vertices[self.faces[near]]                     # (M, 3, 3)

@@ -333,6 +333,13 @@ def nearest_within(q, lo: float, hi: float, grid, index: bool = False):
     return out, at
 
 
+@njit(cache=True, inline="always")
+def _outward(centre, t):
+    """The t-th cell from ``centre`` outwards along an axis: centre, +1, -1, +2, -2, ..."""
+    d = (t + 1) // 2
+    return centre + d if t % 2 == 1 else centre - d
+
+
 @njit(cache=True, parallel=True)
 def tap_hits(openings, radius, h_lo, h_hi, disk, max_cover, max_angle, cover_cell, eighth,
              ten, pts, starts, origin, cell, dims, out):
@@ -361,12 +368,23 @@ def tap_hits(openings, radius, h_lo, h_hi, disk, max_cover, max_angle, cover_cel
         n_cover = 0
         most = max_cover * math.pi * disk ** 2 / cover_cell ** 2
         dead = False                  # a test already failed: the rest cannot save it
-        for a in range(i0, i1 + 1):
+        # columns from the axis outwards: under a shelf or a ceiling, the samples on either
+        # side of the axis fail the test within a few columns (the decision is the same in
+        # any order: it needs every sample, or fails at the first that fails it)
+        ac = min(max(int(math.floor((cx - ox) / cell)), i0), i1)
+        bc = min(max(int(math.floor((cy - oy) / cell)), j0), j1)
+        for ta in range(2 * (i1 - i0) + 1):
             if dead:
                 break
-            for b in range(j0, j1 + 1):
+            a = _outward(ac, ta)
+            if a < i0 or a > i1:
+                continue
+            for tb in range(2 * (j1 - j0) + 1):
                 if dead:
                     break
+                b = _outward(bc, tb)
+                if b < j0 or b > j1:
+                    continue
                 base = (a * ny + b) * nz
                 for c in range(k0, k1 + 1):
                     if dead:
