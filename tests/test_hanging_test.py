@@ -182,6 +182,31 @@ def test_a_plane_cuts_a_box_along_its_outline():
     assert not len(cut.segments((0.0, 0.5, 0.5), (0.0, 1.0, 0.0), reach=1.0))
 
 
+def test_the_fit_kernel_decides_as_its_reference(hanging, room):
+    """The Numba cut-and-pieces kernel against NumPy and SciPy's, on hooks posed over the
+    rail, the cabinet's top and edges, the wall and open air, turned every way about +Z and
+    tilted: the same decision for every pose, both decisions among them."""
+    from scipy.spatial.transform import Rotation
+
+    _, tensor = hanging
+    op, cut = tensor.hook_opening(), room.sections()
+    rng = np.random.default_rng(11)
+    anchors = np.vstack([np.column_stack([rng.normal(scale=0.02, size=40),
+                                          rng.uniform(-0.4, 0.4, 40),
+                                          rng.normal(scale=0.02, size=40)]),
+                         room.points[rng.choice(len(room.points), 120)]])
+    got = []
+    for i, t in enumerate(anchors):
+        rot = Rotation.from_euler("zx", [rng.uniform(0, 360), rng.normal(scale=8)],
+                                  degrees=True).as_matrix()
+        t = t - rot @ op.centre
+        args = (op, rot, t, room.points, room.tree, room.spacing)
+        fast = hooks.fits(*args, sections=cut)
+        assert fast == hooks.fits(*args, sections=cut, reference=True), i
+        got.append(fast)
+    assert any(got) and not all(got)
+
+
 def test_a_cut_visits_the_faces_near_it_as_every_face_s_box_says():
     """The faces indexed by the cubes their boxes meet give a query exactly the faces whose
     boxes come within its reach, as testing every face does: small and large triangles
@@ -199,8 +224,12 @@ def test_a_cut_visits_the_faces_near_it_as_every_face_s_box_says():
             brute = np.flatnonzero(((cut.lo <= centre + reach)
                                     & (cut.hi >= centre - reach)).all(axis=1))
             assert np.array_equal(cut.near_faces(centre, reach), brute), (centre, reach)
+            got = cut.triangles_near(centre, reach).reshape(-1, 9)
+            want = tri[brute].reshape(-1, 9)
+            assert np.array_equal(got[np.lexsort(got.T)], want[np.lexsort(want.T)])
     empty = MeshSections(np.zeros((0, 3)), np.zeros((0, 3), np.int64))
     assert not len(empty.near_faces(np.zeros(3), 0.3))
+    assert not len(empty.triangles_near(np.zeros(3), 0.3))
     assert not len(empty.segments(np.zeros(3), (0.0, 0.0, 1.0), 0.3))
 
 

@@ -31,6 +31,7 @@ class MeshSections:
         self.lo = tri.min(axis=1)
         self.hi = tri.max(axis=1)
         self._index(cell)
+        self._stamp, self._mark = None, 0          # triangles_near's faces seen, per call
 
     def _index(self, cell: float) -> None:
         """The faces by the cubes of edge ``cell`` (m) their bounding boxes meet, as sorted
@@ -85,6 +86,19 @@ class MeshSections:
             cand = np.unique(np.concatenate([self.members[pick], self.large]))
         ok = ((self.lo[cand] <= c + reach) & (self.hi[cand] >= c - reach)).all(axis=1)
         return cand[ok]
+
+    def triangles_near(self, centre, reach: float) -> np.ndarray:
+        """(M, 3, 3) the triangles of :meth:`near_faces` (in another order), gathered by a
+        Numba kernel (:func:`._sections.near_triangles`)."""
+        from interaction_tensor.geometry import _sections
+
+        if self._stamp is None:
+            self._stamp = np.zeros(len(self.faces), np.int64)
+        self._mark += 1
+        return _sections.near_triangles(
+            np.asarray(centre, np.float64), float(reach), self.vertices, self.faces, self.lo,
+            self.hi, self.keys, self.starts, self.members, self.large, self.origin,
+            self.cell, self.dims, MAX_QUERY_CELLS, self._stamp, self._mark)
 
     def segments(self, centre, normal, reach: float) -> np.ndarray:
         """(K, 2, 3) the segments where the plane through ``centre`` (3,) normal to

@@ -488,3 +488,140 @@ def highest(points, orient, offsets, limit, table, cell: float) -> np.ndarray:
                         np.ascontiguousarray(limit, np.float64), starts, heights,
                         np.asarray(origin, np.int64), float(cell), int(nx), int(ny), out)
     return out
+
+
+# ----------------------------------------------------------------------- hanging's fit
+@njit(cache=True)
+def section_fit(tri, c, normal, reach, step, rot, side, up, inside, limit, margin, link,
+                least, bins):
+    """:func:`.hooks.fits` on a mesh's cut, the same arithmetic: the plane through ``c``
+    normal to ``normal`` cuts triangles ``tri`` (M, 3, 3) (the two edges each crosses, in
+    edge order), a point every ``step`` or closer along each cut within ``reach`` of ``c``,
+    in the opening's frame (``rot``'s columns; ``side`` and ``up`` span its plane); pieces
+    are the points linked within ``link``; True unless some piece reaching within
+    ``inside`` of the axis has ``least`` points past ``limit`` (per direction bin, of
+    ``bins``) plus ``margin``."""
+    m = tri.shape[0]
+    # the cut's segments
+    seg = np.empty((m, 2, 3))
+    k = 0
+    for f in range(m):
+        s0 = 0.0
+        smin = math.inf
+        smax = -math.inf
+        sv = np.empty(3)
+        for v in range(3):
+            s0 = ((tri[f, v, 0] - c[0]) * normal[0] + (tri[f, v, 1] - c[1]) * normal[1]
+                  + (tri[f, v, 2] - c[2]) * normal[2])
+            sv[v] = s0
+            smin = min(smin, s0)
+            smax = max(smax, s0)
+        if not (smin < 0.0 and smax > 0.0):
+            continue
+        e = 0
+        for v in range(3):
+            w = (v + 1) % 3
+            sa, sb = sv[v], sv[w]
+            if (sa < 0.0 and sb >= 0.0) or (sa >= 0.0 and sb < 0.0):
+                t = sa / (sa - sb)
+                for j in range(3):
+                    seg[k, e, j] = tri[f, v, j] + t * (tri[f, w, j] - tri[f, v, j])
+                e += 1
+                if e == 2:
+                    break
+        k += 1
+    # the points along them, within reach, in the opening's frame
+    total = 0
+    counts = np.empty(k, np.int64)
+    for g in range(k):
+        dx = seg[g, 1, 0] - seg[g, 0, 0]
+        dy = seg[g, 1, 1] - seg[g, 0, 1]
+        dz = seg[g, 1, 2] - seg[g, 0, 2]
+        counts[g] = int(math.ceil(math.sqrt(dx * dx + dy * dy + dz * dz) / step)) + 1
+        total += counts[g]
+    d = np.empty((total, 3))
+    n = 0
+    for g in range(k):
+        cnt = counts[g]
+        den = max(cnt - 1, 1)
+        for q in range(cnt):
+            f = q / den
+            px = seg[g, 0, 0] + f * (seg[g, 1, 0] - seg[g, 0, 0]) - c[0]
+            py = seg[g, 0, 1] + f * (seg[g, 1, 1] - seg[g, 0, 1]) - c[1]
+            pz = seg[g, 0, 2] + f * (seg[g, 1, 2] - seg[g, 0, 2]) - c[2]
+            if math.sqrt(px * px + py * py + pz * pz) > reach:
+                continue
+            for j in range(3):
+                d[n, j] = px * rot[0, j] + py * rot[1, j] + pz * rot[2, j]
+            n += 1
+    d = d[:n]
+    ins = np.zeros(n, np.bool_)
+    past = np.zeros(n, np.bool_)
+    any_inside = False
+    n_past = 0
+    width = 2.0 * math.pi / bins
+    for i in range(n):
+        x = d[i, 0] * side[0] + d[i, 1] * side[1] + d[i, 2] * side[2]
+        z = d[i, 0] * up[0] + d[i, 1] * up[1] + d[i, 2] * up[2]
+        r = math.hypot(x, z)
+        ins[i] = r <= inside
+        any_inside = any_inside or ins[i]
+        b = int(min(max(math.floor((math.atan2(z, x) + math.pi) / width), 0.0), bins - 1.0))
+        past[i] = r > limit[b] + margin
+        if past[i]:
+            n_past += 1
+    if not any_inside or n_past < least:
+        return True
+    # the pieces through the opening: a flood from the points inside it over the links
+    # (points within link of each other, found on a grid of cells link wide), counting
+    # the points past the limit it reaches, until least of them
+    lo = np.empty(3)
+    dims = np.empty(3, np.int64)
+    for j in range(3):
+        lo[j] = d[:, j].min()
+        dims[j] = int(math.floor((d[:, j].max() - lo[j]) / link)) + 1
+    cell = np.empty((n, 3), np.int64)
+    key = np.empty(n, np.int64)
+    for i in range(n):
+        for j in range(3):
+            cell[i, j] = int(math.floor((d[i, j] - lo[j]) / link))
+        key[i] = (cell[i, 0] * dims[1] + cell[i, 1]) * dims[2] + cell[i, 2]
+    order = np.argsort(key)
+    skey = key[order]
+    seen = ins.copy()
+    queue = np.flatnonzero(ins)
+    stack = np.empty(n, np.int64)
+    top = len(queue)
+    stack[:top] = queue
+    bad = 0
+    for i in range(top):
+        if past[stack[i]]:
+            bad += 1
+    if bad >= least:
+        return False
+    l2 = link * link
+    while top > 0:
+        top -= 1
+        i = stack[top]
+        for a in range(max(cell[i, 0] - 1, 0), min(cell[i, 0] + 1, dims[0] - 1) + 1):
+            for b in range(max(cell[i, 1] - 1, 0), min(cell[i, 1] + 1, dims[1] - 1) + 1):
+                for cc in range(max(cell[i, 2] - 1, 0), min(cell[i, 2] + 1, dims[2] - 1) + 1):
+                    kk = (a * dims[1] + b) * dims[2] + cc
+                    s = np.searchsorted(skey, kk)
+                    while s < n and skey[s] == kk:
+                        o = order[s]
+                        s += 1
+                        if seen[o]:
+                            continue
+                        ex = d[o, 0] - d[i, 0]
+                        ey = d[o, 1] - d[i, 1]
+                        ez = d[o, 2] - d[i, 2]
+                        if ex * ex + ey * ey + ez * ez <= l2:
+                            seen[o] = True
+                            stack[top] = o
+                            top += 1
+                            if past[o]:
+                                bad += 1
+                                if bad >= least:
+                                    return False
+    return True

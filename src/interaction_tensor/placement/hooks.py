@@ -148,7 +148,7 @@ def opening_of(samples: np.ndarray, section: np.ndarray) -> Opening | None:
 def fits(opening: Opening, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
          tree: cKDTree, spacing: float, margin: float = FIT_MARGIN,
          min_samples: int = FIT_MIN_SAMPLES, reach: float = FIT_REACH,
-         sections=None) -> bool:
+         sections=None, reference: bool = False) -> bool:
     """Whether what passes through the opening, posed by ``rot`` (3, 3) and ``t`` (3,),
     fits inside it. The scene's samples (``points`` and their ``tree``, at ``spacing``)
     within a spacing of the posed plane and ``reach`` of its centre are split into connected
@@ -163,12 +163,26 @@ def fits(opening: Opening, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
     the samples near it, a point every :data:`SECTION_STEP` of a spacing along it, and a
     piece fails with a spacing's length of cut past the limit: random samples leave gaps of
     several centimetres in a thin slab, and a wall's top under a towel's fold then looks
-    like a rod."""
+    like a rod. The cut and its pieces are one Numba kernel
+    (:func:`~interaction_tensor.placement._kernels.section_fit`); ``reference``: NumPy and
+    SciPy, the path it is tested against."""
     c = rot @ opening.centre + t
     if sections is not None:
         step = SECTION_STEP * spacing
-        d = (sections.points(c, rot @ opening.axis, reach, step) - c) @ rot
         link, least = FIT_LINK * step, max(min_samples, int(round(1.0 / SECTION_STEP)))
+        if not reference:
+            from interaction_tensor.placement import _kernels
+
+            normal = rot @ opening.axis
+            normal = normal / np.linalg.norm(normal)
+            tri = sections.triangles_near(c, reach)
+            return bool(_kernels.section_fit(
+                np.ascontiguousarray(tri), c, normal, float(reach), float(step),
+                np.ascontiguousarray(rot, np.float64), np.asarray(opening.side, np.float64),
+                np.asarray(opening.up, np.float64), float(opening.inside),
+                np.asarray(opening.limit, np.float64), float(margin), float(link),
+                int(least), BINS))
+        d = (sections.points(c, rot @ opening.axis, reach, step) - c) @ rot
     else:
         near = np.asarray(tree.query_ball_point(c, reach), np.int64)
         d = (points[near] - c) @ rot                      # the opening's (training) frame
