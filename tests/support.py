@@ -116,22 +116,22 @@ class FakeCheck:
         return self.table[i]
 
 
-def parallel_kernels_run(path) -> None:
+def parallel_kernels_run(path, tensor) -> None:
     """Write to ``path`` (.npz) what Numba's parallel kernels decide on a small case: a
     cloud's estimated normals, and the corner box's pairs in its corner as a mesh and as a
     cloud, scored by the grid search and through the neighbour cache. The same in any number of
-    threads (a test runs it with several, in a process of its own)."""
+    threads (a test runs it with several, in a process of its own). ``tensor``: the corner
+    box's descriptor file."""
     from interaction_tensor.detection.search import Engine, detect
 
-    query, scene_object = corner_example()
-    tensor = it.InteractionTensor.fit(query, scene_object, "corner-box",
-                                      it.TrainSettings(query_points=3000, seed=1))
+    _, scene_object = corner_example()
+    tensor = it.load_tensor(tensor)
     mesh = it.prepare_scene(scene_object, 0.01, seed=2)
     out = {"normals": it.prepare_scene(it.Geometry(mesh.points), 0.01).normals}
     cloud = it.prepare_scene(it.Geometry(mesh.points, normals=mesh.normals), 0.01)
     for name, scene in (("mesh", mesh), ("cloud", cloud)):
         for cache in (False, True):
-            det = detect(scene, tensor, it.DetectSettings(sample_fraction=0.5, seed=4),
+            det = detect(scene, tensor, it.DetectSettings(sample_fraction=0.3, seed=4),
                          engine=Engine(neighbour_cache=cache, batch_size=256))
             for field in ("score", "accepted", "decided_at"):
                 out[f"{name}-{cache}-{field}"] = getattr(det.pairs, field)

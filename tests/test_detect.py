@@ -68,20 +68,21 @@ def test_detection_is_deterministic(corner_tensor):
     np.testing.assert_array_equal(runs[0].candidate_indices, runs[1].candidate_indices)
 
 
-def test_detection_decides_alike_in_any_number_of_threads(tmp_path):
+def test_detection_decides_alike_in_any_number_of_threads(corner_tensor, tmp_path):
     """Numba's parallel kernels (normals, placement tests, scoring, the neighbour cache) in
     this process's threads (one each on a 2-core machine running tests in 2 workers) and
     in three, which splits their loops otherwise: the same normals, pairs and top k."""
     import subprocess
     import sys
 
-    parallel_kernels_run(tmp_path / "here.npz")
+    tensor = corner_tensor.save(tmp_path / "corner.npz")
+    parallel_kernels_run(tmp_path / "here.npz", tensor)
     env = dict(os.environ, NUMBA_NUM_THREADS="3",
                PYTHONPATH=os.pathsep.join([os.path.dirname(__file__),
                                            os.environ.get("PYTHONPATH", "")]))
-    code = ("import sys, support; support.parallel_kernels_run(sys.argv[1])")
-    subprocess.run([sys.executable, "-c", code, str(tmp_path / "threads.npz")], env=env,
-                   check=True, timeout=600)
+    code = "import sys, support; support.parallel_kernels_run(sys.argv[1], sys.argv[2])"
+    subprocess.run([sys.executable, "-c", code, str(tmp_path / "threads.npz"), str(tensor)],
+                   env=env, check=True, timeout=600)
     here, threads = np.load(tmp_path / "here.npz"), np.load(tmp_path / "threads.npz")
     assert sorted(here.files) == sorted(threads.files)
     assert here["mesh-False-accepted"].any() and here["cloud-False-accepted"].any()
