@@ -34,7 +34,8 @@ FIT_SLAB = 0.015
 FIT_REACH = 0.30
 #: A placement fails when at least this many scene samples go past the outline.
 FIT_MIN_SAMPLES = 2
-#: Scene samples closer than this (in scene spacings) belong to the same piece.
+#: Scene samples (or points of a mesh's cut) closer than this (in scene spacings) belong to
+#: the same piece.
 FIT_LINK = 2.5
 #: On a mesh scene, the step (in scene spacings) of the points along the plane's exact cut
 #: of the mesh that :func:`fits` follows.
@@ -163,13 +164,16 @@ def fits(opening: Opening, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
     the samples near it, a point every :data:`SECTION_STEP` of a spacing along it, and a
     piece fails with a spacing's length of cut past the limit: random samples leave gaps of
     several centimetres in a thin slab, and a wall's top under a towel's fold then looks
-    like a rod. The cut and its pieces are one Numba kernel
+    like a rod. Its points link into pieces as samples do (within :data:`FIT_LINK`
+    spacings), across the gaps a modelled scene leaves between a board's front and its
+    lip, or a cabinet's panels: linked only along the cut, the lip a hook lies along came
+    apart from the board past the hook. The cut and its pieces are one Numba kernel
     (:func:`~interaction_tensor.placement._kernels.section_fit`); ``reference``: NumPy and
     SciPy, the path it is tested against."""
     c = rot @ opening.centre + t
     if sections is not None:
         step = SECTION_STEP * spacing
-        link, least = FIT_LINK * step, max(min_samples, int(round(1.0 / SECTION_STEP)))
+        link, least = FIT_LINK * spacing, max(min_samples, int(round(1.0 / SECTION_STEP)))
         if not reference:
             from interaction_tensor.placement import _kernels
 
