@@ -1,9 +1,12 @@
-"""Numba kernel of the clearance test (imported only when Numba is available; see
-clearance.py): for each placement, how many clearance points have a scene sample nearer than
-their free space. A ball-emptiness test on the scene's grid (:class:`kernels.Grid`): only the
-cells that meet the ball are visited and a point stops at its first sample inside, so open
-space costs a few cell look-ups. Exact: it answers ``d < need`` for the nearest sample's
-distance ``d``, as the reference (a bounded cKDTree query) does.
+"""Numba kernels of the placement tests (:mod:`.checks`) and of hanging's fit test
+(:func:`.hooks.fits`), each with a NumPy or SciPy reference it is tested against.
+
+The clearance test's: for each placement, how many clearance points have a scene sample
+nearer than their free space. A ball-emptiness test on the scene's grid: only the cells
+that meet the ball are visited and a point stops at its first sample inside, so open space
+costs a few cell look-ups. Exact: it answers ``d < need`` for the nearest sample's distance
+``d``, as the reference (a bounded cKDTree query) does. The other tests' kernels visit the
+cells under their boxes, columns, openings and axes in the same way.
 """
 
 import math
