@@ -248,7 +248,7 @@ def test_settings_are_validated():
 
 
 def test_detect_many_equals_one_at_a_time(corner_tensor):
-    from support import corner_example, parallel_kernels_run
+    from support import corner_example
     q, s = corner_example()
     # a second descriptor: the same interaction with the box turned into a 'down' tensor
     other = it.InteractionTensor.fit(q, s, "corner-box-2", it.TrainSettings(query_points=2000, seed=4))

@@ -67,29 +67,13 @@ class MeshSections:
 
     def near_faces(self, centre, reach: float) -> np.ndarray:
         """The faces (ascending) whose bounding box comes within ``reach`` (m) of ``centre``
-        along each axis: those of the cubes the query's box meets, tested exactly."""
+        along each axis, every face's box tested: the reference of :meth:`triangles_near`."""
         c = np.asarray(centre, float)
-        a = np.maximum(np.floor((c - reach - self.origin) / self.cell), 0).astype(np.int64)
-        b = np.minimum(np.floor((c + reach - self.origin) / self.cell),
-                       self.dims - 1).astype(np.int64)
-        if not (a <= b).all() or not len(self.keys):
-            cand = self.large
-        elif np.prod(b - a + 1) > MAX_QUERY_CELLS:   # a query as large as the scene
-            return np.flatnonzero(((self.lo <= c + reach) & (self.hi >= c - reach)).all(axis=1))
-        else:
-            g = np.meshgrid(*(np.arange(a[i], b[i] + 1) for i in range(3)), indexing="ij")
-            key = ((g[0] * self.dims[1] + g[1]) * self.dims[2] + g[2]).ravel()
-            at = np.minimum(np.searchsorted(self.keys, key), len(self.keys) - 1)
-            at = at[self.keys[at] == key]                   # the cubes that hold faces
-            lo, n = self.starts[at], self.starts[at + 1] - self.starts[at]
-            pick = np.repeat(lo - np.cumsum(n) + n, n) + np.arange(int(n.sum()))
-            cand = np.unique(np.concatenate([self.members[pick], self.large]))
-        ok = ((self.lo[cand] <= c + reach) & (self.hi[cand] >= c - reach)).all(axis=1)
-        return cand[ok]
+        return np.flatnonzero(((self.lo <= c + reach) & (self.hi >= c - reach)).all(axis=1))
 
     def triangles_near(self, centre, reach: float) -> np.ndarray:
-        """(M, 3, 3) the triangles of :meth:`near_faces` (in another order), gathered by a
-        Numba kernel (:func:`._sections.near_triangles`)."""
+        """(M, 3, 3) the triangles of :meth:`near_faces` (in another order), gathered from
+        the cubes the query's box meets by a Numba kernel (:func:`._sections.near_triangles`)."""
         from interaction_tensor.geometry import _sections
 
         if self._stamp is None:

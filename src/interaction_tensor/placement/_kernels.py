@@ -507,12 +507,11 @@ def section_fit(tri, c, normal, reach, step, rot, side, up, inside, limit, margi
     m = tri.shape[0]
     # the cut's segments
     seg = np.empty((m, 2, 3))
+    sv = np.empty(3)
     k = 0
     for f in range(m):
-        s0 = 0.0
         smin = math.inf
         smax = -math.inf
-        sv = np.empty(3)
         for v in range(3):
             s0 = ((tri[f, v, 0] - c[0]) * normal[0] + (tri[f, v, 1] - c[1]) * normal[1]
                   + (tri[f, v, 2] - c[2]) * normal[2])
