@@ -165,7 +165,9 @@ def test_batch_on_a_dask_scheduler_survives_a_killed_worker(data, tmp_path, dask
     deadline = time.time() + 300
     first = None
     while time.time() < deadline and run.poll() is None:
-        done = sorted(out.glob("*/*/predictions.json"))
+        # a finished result's folder (a result being written is a hidden ".part" one)
+        done = sorted(p for p in out.glob("*/*/predictions.json")
+                      if not p.parent.name.startswith("."))
         if done:
             first = done[0]
             break

@@ -126,3 +126,25 @@ def test_a_vast_cloud_asks_the_tree_and_gets_the_same_normals():
     assert KNearest(pts, knn_cell(0.016, 16)).cell > 2 * knn_cell(0.016, 16)
     assert _apart(estimate_normals(pts, spacing=0.016),
                   estimate_normals(pts, reference=True)).max() < 1e-12
+
+
+def test_a_board_as_thick_as_the_spacing_keeps_its_tops_normals():
+    """A 3 cm table top sampled 3 cm apart: both its faces lie in every neighbourhood, and
+    the two fits tilt a quarter of the top's planes through both; choosing among the
+    neighbours' planes the one the neighbours lie nearest brings them back up."""
+    from interaction_tensor.examples.procedural import box_part, parts_mesh
+    from interaction_tensor.geometry.sampling import _fits_numpy, _nearest_distance
+
+    board = parts_mesh([box_part("top", (0, 0, 0.72), (1.2, 0.8, 0.03))])
+    pts, true = sample_mesh(board, round(mesh_area(board) / 0.03 ** 2), 0)
+    inner = (true[:, 2] > 0.99) & (np.abs(pts[:, 0]) < 0.5) & (np.abs(pts[:, 1]) < 0.3)
+    tree = cKDTree(pts)
+    _, idx = tree.query(pts, k=16)
+    slab = _nearest_distance(pts, lambda q, k: tree.query(q, k=k))
+    first, again, count = _fits_numpy(pts, pts, idx, slab)
+    two = np.where((count >= 5)[:, None], again, first)
+    up = np.cos(np.radians(10))
+    assert (np.abs(two[inner, 2]) > up).mean() < 0.8
+    fast = estimate_normals(pts, spacing=0.03)
+    assert (fast[inner, 2] > up).mean() > 0.95
+    assert _apart(fast, estimate_normals(pts, reference=True)).max() < 1e-12

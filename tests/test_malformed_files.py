@@ -431,7 +431,7 @@ def test_normal_estimation_shows_its_progress(corner_tensor, capsys):
     pts = np.column_stack([rng.random((120_000, 2)) * 3, rng.random(120_000) * 1e-3])
     normals = sampling.estimate_normals(pts, progress=True)
     err = capsys.readouterr().err
-    assert "normals:" in err and "/120k" in err and "pt/s" in err, err
+    assert "normals:" in err and "/120k" in err and "fit/s" in err, err
     np.testing.assert_allclose(np.abs(normals[:, 2]), 1.0, atol=0.2)
     assert np.array_equal(normals, sampling.estimate_normals(pts))
     assert capsys.readouterr().err == ""

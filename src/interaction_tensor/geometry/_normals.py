@@ -241,3 +241,52 @@ def least_eigenvectors(cov, gap, out, unsure):
         out[i, 1] = vy / n
         out[i, 2] = vz / n
         unsure[i] = False
+
+
+@njit(cache=True, parallel=True)
+def choose_planes(points, queries, idx, planes, candidates, slab, choice):
+    """``choice[i]``: of the plane normals ``planes[idx[i, j]]`` (j < ``candidates``; rows
+    of NaN skipped), the one whose plane through ``queries[i]`` the neighbours ``idx[i]``
+    lie nearest: each within ``slab`` counts 1 - (h / slab)^2 at distance h, summed in
+    neighbour order; ties to the nearer neighbour's (the reference: ``_choose_numpy``)."""
+    w = idx.shape[1]
+    s2 = slab * slab
+    inv = 1.0 / s2 if slab > 0 else 0.0
+    for i in prange(idx.shape[0]):
+        qx, qy, qz = queries[i, 0], queries[i, 1], queries[i, 2]
+        best = -1.0
+        bx = by = bz = 0.0
+        for j in range(candidates):
+            c = idx[i, j]
+            cx, cy, cz = planes[c, 0], planes[c, 1], planes[c, 2]
+            if cx != cx:
+                continue
+            score = 0.0
+            for m in range(w):
+                p = idx[i, m]
+                h = (points[p, 0] - qx) * cx + (points[p, 1] - qy) * cy \
+                    + (points[p, 2] - qz) * cz
+                h2 = h * h
+                score = score + (1.0 - h2 * inv if h2 < s2 else 0.0)
+            if score > best:
+                best = score
+                bx, by, bz = cx, cy, cz
+        choice[i, 0] = bx
+        choice[i, 1] = by
+        choice[i, 2] = bz
+
+
+@njit(cache=True, parallel=True)
+def plane_spread(points, queries, idx, plane, out):
+    """``out[i]``: the farthest of the neighbours ``idx[i]`` from the plane through
+    ``queries[i]`` normal to ``plane[i]`` (m)."""
+    for i in prange(idx.shape[0]):
+        far = 0.0
+        for j in range(idx.shape[1]):
+            p = idx[i, j]
+            h = abs((points[p, 0] - queries[i, 0]) * plane[i, 0]
+                    + (points[p, 1] - queries[i, 1]) * plane[i, 1]
+                    + (points[p, 2] - queries[i, 2]) * plane[i, 2])
+            if h > far:
+                far = h
+        out[i] = far
