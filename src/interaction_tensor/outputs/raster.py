@@ -61,12 +61,23 @@ class Camera:
 
     def project(self, points: np.ndarray):
         """Pixel coordinates and depth of (N, 3) points: px (N,), py (N,), depth (N,) m."""
-        rel = np.asarray(points, float) - self.eye
-        z = rel @ self.forward
-        zs = np.where(np.abs(z) > 1e-9, z, 1e-9)
-        px = 0.5 * self.width + self.focal * (rel @ self.right) / zs
-        py = 0.5 * self.height - self.focal * (rel @ self.upv) / zs
+        px, py, z, _ = self._project(points)
         return px, py, z
+
+    def _project(self, points: np.ndarray):
+        """:meth:`project`, and the (N, 3) points in the camera's frame (right, up,
+        forward), from one product with its axes."""
+        cam = (np.asarray(points, float) - self.eye) @ self.axes.T
+        z = cam[:, 2]
+        zs = np.where(np.abs(z) > 1e-9, z, 1e-9)
+        px = 0.5 * self.width + self.focal * cam[:, 0] / zs
+        py = 0.5 * self.height - self.focal * cam[:, 1] / zs
+        return px, py, z, cam
+
+    @property
+    def axes(self) -> np.ndarray:
+        """(3, 3) rows: the camera's right, up and forward directions."""
+        return np.array([self.right, self.upv, self.forward])
 
 
 def orbit_camera(target, azimuth_deg: float, elevation_deg: float, distance: float,
@@ -145,6 +156,7 @@ class Canvas:
         self.albedo = np.zeros((n, 3), np.float32)
         self.normal = np.zeros((n, 3), np.float32)
         self.lit = np.zeros(n, bool)
+        self._winner = None         # the splat kernel's winners, -1 between splats
 
     # ------------------------------------------------------------------ drawing
     def points(self, points, colors, normals=None, size: float | None = None,
@@ -161,13 +173,13 @@ class Canvas:
         if len(pts) == 0:
             return
         cols = np.broadcast_to(np.asarray(colors, np.float32) / 255.0, (len(pts), 3))
-        px, py, z = self.cam.project(pts)
+        px, py, z, rel = self.cam._project(pts)
         keep = (z > self.cam.near) & (px > -50) & (px < self.w + 50) & (py > -50) & \
             (py < self.h + 50) & np.isfinite(px) & np.isfinite(py)
         if not keep.any():
             return
         idx = np.flatnonzero(keep)
-        px, py, z = px[idx], py[idx], z[idx]
+        px, py, z, rel = px[idx], py[idx], z[idx], rel[idx]
         if radius_px is not None:
             rad = np.full(len(idx), int(radius_px) * self.ss)
         else:
@@ -177,32 +189,26 @@ class Canvas:
         nrm = None
         if normals is not None and lit:
             nrm = np.asarray(normals, float)[idx]
-            facing = np.einsum("ij,ij->i", nrm, self.cam.eye - pts[idx]) < 0
-            nrm = np.where(facing[:, None], -nrm, nrm)
+            # in the camera's frame; turned to face the camera (away from the point's ray)
+            abc = nrm @ self.cam.axes.T
+            sign = np.where(np.einsum("ij,ij->i", abc, rel) > 0, -1.0, 1.0)
+            nrm *= sign[:, None]
+            abc *= sign[:, None]
         ix, iy = np.rint(px).astype(np.int64), np.rint(py).astype(np.int64)
         # oriented splats: depth follows each point's tangent plane across its disk, so
         # overlapping splats of one surface blend into a smooth surface
         gx = gy = None
         if nrm is not None:
-            a, b, c = nrm @ self.cam.right, nrm @ self.cam.upv, nrm @ self.cam.forward
+            a, b, c = abc[:, 0], abc[:, 1], abc[:, 2]
             c = np.where(c < 0, np.minimum(c, -0.35), np.maximum(c, 0.35))
             gx = (-a / c * z / self.cam.focal).astype(np.float32)
             gy = (b / c * z / self.cam.focal).astype(np.float32)
+        if not reference:
+            self._splat(ix, iy, z, gx, gy, rad, cols[idx], nrm)
+            return
         for r in np.unique(rad):
             sel = np.flatnonzero(rad == r)
             dx, dy = _disk(r)
-            if not reference:
-                from interaction_tensor.outputs._splat import splat
-
-                empty = np.zeros(0, np.float32)
-                winner = np.full(self.w * self.h, -1, np.int64)
-                splat(ix[sel], iy[sel], z[sel].astype(np.float32),
-                      empty if gx is None else gx[sel], empty if gy is None else gy[sel],
-                      dx.astype(np.int64), dy.astype(np.int64), self.w, self.h,
-                      self.depth, winner)
-                flat = np.flatnonzero(winner >= 0)
-                self._paint(flat, sel[winner[flat]], cols[idx], nrm)
-                continue
             step = max(1, 8_000_000 // len(dx))
             for s in range(0, len(sel), step):
                 part = sel[s:s + step]
@@ -220,6 +226,42 @@ class Canvas:
                 np.minimum.at(self.depth, flat, d)
                 win = d <= self.depth[flat]
                 self._paint(flat[win], src[win], cols[idx], nrm)
+
+    def _splat(self, ix, iy, z, gx, gy, rad, cols, nrm) -> None:
+        """The reference's splats, smallest disks first, by one Numba kernel
+        (:func:`~._splat.splat`) in bands of rows, then the winners painted."""
+        import numba
+
+        from interaction_tensor.outputs._splat import splat
+
+        rad = rad.astype(np.uint16)                 # small integers: a radix sort
+        order = np.argsort(rad, kind="stable")
+        sizes = np.flatnonzero(np.bincount(rad))
+        disks = [_disk(r) for r in sizes]
+        counts = np.zeros(int(sizes.max()) + 1, np.int64)
+        counts[sizes] = [len(d[0]) for d in disks]
+        first = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        dx = np.concatenate([d[0] for d in disks]).astype(np.int64)
+        dy = np.concatenate([d[1] for d in disks]).astype(np.int64)
+        # the box of pixels the disks reach: only it is searched for winners and reset
+        x0, x1 = max(int((ix - rad).min()), 0), min(int((ix + rad).max()) + 1, self.w)
+        y0, y1 = max(int((iy - rad).min()), 0), min(int((iy + rad).max()) + 1, self.h)
+        if x0 >= x1 or y0 >= y1:
+            return
+        if self._winner is None:
+            self._winner = np.full(self.w * self.h, -1, np.int64)
+        empty = np.zeros(0, np.float32)
+        bands = min(self.h, numba.get_num_threads()) if len(ix) > 50_000 else 1
+        splat(ix[order], iy[order], z[order].astype(np.float32),
+              empty if gx is None else gx[order], empty if gy is None else gy[order],
+              rad[order].astype(np.int64), dx, dy, first, self.w, self.h, bands, self.depth,
+              self._winner)
+        box = self._winner.reshape(self.h, self.w)[y0:y1, x0:x1]
+        local = np.flatnonzero(box >= 0)
+        rows, cols_in = np.divmod(local, x1 - x0)
+        won = box[rows, cols_in]
+        box[rows, cols_in] = -1
+        self._paint((rows + y0) * self.w + cols_in + x0, order[won], cols, nrm)
 
     def _paint(self, flat, src, cols, nrm) -> None:
         """Give pixels ``flat`` the colour (and normal, lit) of the splatted points ``src``

@@ -221,7 +221,7 @@ def _compose(panels, captions, title: str, colorbar, labels=None):
 def _save_png(img, out_png) -> Path:
     out_png = Path(out_png)
     with atomic_path(out_png) as tmp:
-        img.save(tmp, format="PNG", optimize=True)
+        img.save(tmp, format="PNG", compress_level=6)   # "optimize": 4x the time, 1.5 % smaller
     return out_png
 
 
