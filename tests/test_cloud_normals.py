@@ -148,3 +148,17 @@ def test_a_board_as_thick_as_the_spacing_keeps_its_tops_normals():
     fast = estimate_normals(pts, spacing=0.03)
     assert (fast[inner, 2] > up).mean() > 0.95
     assert _apart(fast, estimate_normals(pts, reference=True)).max() < 1e-12
+
+
+@settings(max_examples=30, deadline=None)
+@given(arrays(np.float64, st.tuples(st.integers(1, 80), st.just(3)),
+              elements=st.floats(-1, 1, allow_nan=False).map(lambda v: round(v, 1))),
+       st.sampled_from([None, 0.05, 0.2]), st.booleans())
+def test_normals_of_tiny_and_degenerate_clouds_are_unit_vectors(points, spacing, subset):
+    """A point, two, duplicates, collinear or coarse-grid points: every normal is a finite
+    unit vector, whatever the neighbour search and the points asked for."""
+    at = np.arange(0, len(points), 2) if subset else None
+    normals = estimate_normals(points, spacing=spacing, at=at)
+    assert normals.shape == (len(points) if at is None else len(at), 3)
+    assert np.all(np.isfinite(normals))
+    np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-9)
