@@ -150,6 +150,24 @@ def test_a_board_as_thick_as_the_spacing_keeps_its_tops_normals():
     assert _apart(fast, estimate_normals(pts, reference=True)).max() < 1e-12
 
 
+def test_a_noisy_face_whose_neighbours_agree_keeps_its_plane(monkeypatch):
+    """Where the neighbours' planes agree, choosing among them would change next to
+    nothing: the normals of a noisy room are as good as when every point chooses."""
+    from interaction_tensor.geometry import sampling
+
+    spacing = 0.02
+    pts, true = sample_mesh(demo.build().scene, int(mesh_area(demo.build().scene)
+                                                    / spacing ** 2), 0)
+    pts = pts + np.random.default_rng(0).normal(0, 0.002, pts.shape)
+    kept = estimate_normals(pts, spacing=spacing)
+    monkeypatch.setattr(sampling, "NORMAL_AGREE", 0.0)        # every unsure point chooses
+    chosen = estimate_normals(pts, spacing=spacing)
+    off = [(_apart(n, true) > np.sin(np.radians(10))).mean() for n in (kept, chosen)]
+    assert off[0] <= off[1] + 0.002
+    assert (_apart(kept, chosen) > 1e-9).mean() > 0.05           # the rule skipped many
+    assert off[0] < 0.05
+
+
 @settings(max_examples=30, deadline=None)
 @given(arrays(np.float64, st.tuples(st.integers(1, 80), st.just(3)),
               elements=st.floats(-1, 1, allow_nan=False).map(lambda v: round(v, 1))),

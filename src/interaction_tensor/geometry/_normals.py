@@ -290,3 +290,19 @@ def plane_spread(points, queries, idx, plane, out):
             if h > far:
                 far = h
         out[i] = far
+
+
+@njit(cache=True, parallel=True)
+def planes_agree(planes, near, rows, normals, out):
+    """``out[i]``: the least |cosine| between ``normals[i]`` and the ``planes`` of the
+    points ``near[rows[i]]``."""
+    for i in prange(rows.shape[0]):
+        least = 1.0
+        r = rows[i]
+        for j in range(near.shape[1]):
+            p = near[r, j]
+            c = abs(planes[p, 0] * normals[i, 0] + planes[p, 1] * normals[i, 1]
+                    + planes[p, 2] * normals[i, 2])
+            if c < least:
+                least = c
+        out[i] = least

@@ -107,10 +107,14 @@ class KNearest:
         lin = lin[self.order]
         self.points = np.ascontiguousarray(points[self.order])
         n_cells = int(np.prod(self.dims))
-        self.starts = np.empty(n_cells + 1, np.int32 if len(points) < 2 ** 31 else np.int64)
-        for c in range(0, n_cells + 1, 1 << 20):
-            self.starts[c:c + (1 << 20)] = np.searchsorted(
-                lin, np.arange(c, min(c + (1 << 20), n_cells + 1)))
+        # cell c's first point, or the next occupied cell's: each occupied cell's first
+        # position, then a running minimum from the end
+        self.starts = np.full(n_cells + 1, len(points),
+                              np.int32 if len(points) < 2 ** 31 else np.int64)
+        first = np.flatnonzero(np.diff(lin, prepend=-1))
+        self.starts[lin[first]] = first
+        del first
+        np.minimum.accumulate(self.starts[::-1], out=self.starts[::-1])
 
     def query(self, queries: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
         """((Q, k) distances, (Q, k) int64 indices into the points), nearest first, as

@@ -364,16 +364,17 @@ def hot_copy(a: np.ndarray, order: np.ndarray) -> np.ndarray:
     return out
 
 
-def spatially_sorted(points: np.ndarray, normals: np.ndarray, spacing: float, *more):
-    """``points`` and ``normals`` (and any ``more`` arrays of a value a point) reordered
-    cell by cell as :meth:`Scene.grid` sorts them, so that the grid shares the scene's
-    arrays instead of copying them (48 bytes a point) and neighbouring points lie near each
-    other in memory."""
+def spatially_sorted(points: np.ndarray, normals: np.ndarray | None, spacing: float, *more):
+    """``points`` and ``normals`` (or None) and any ``more`` arrays of a value a point
+    reordered cell by cell as :meth:`Scene.grid` sorts them, so that the grid shares the
+    scene's arrays instead of copying them (48 bytes a point) and neighbouring points lie
+    near each other in memory."""
 
     lin, *_ = grid_cells(points, GRID_CELL_FACTOR * spacing)
     order = np.argsort(lin, kind="stable")
     del lin
-    return (hot_copy(points, order), hot_copy(normals, order)) + tuple(m[order] for m in more)
+    return ((hot_copy(points, order), None if normals is None else hot_copy(normals, order))
+            + tuple(m[order] for m in more))
 
 
 def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
@@ -444,15 +445,16 @@ def prepare_scene(geometry: Geometry, spacing: float = 0.01, seed: int = 0,
         points = points[keep]
         tree = cKDTree(points)
         measured = mean_spacing(points, tree)
-    if normals is None:
-        normals = estimate_normals(points, tree=tree, progress=progress, spacing=measured)
-    else:
-        length = np.linalg.norm(normals, axis=1, keepdims=True)
-        normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
     # the tree is not kept: the default (Numba) backend searches its own grid, and a
     # cKDTree costs 32 bytes a point (rebuilt on first use by the other paths)
     del tree
-    points, normals = spatially_sorted(points, normals, measured)
+    if normals is None:                 # sorted first: neighbours' searches near in memory
+        points, _ = spatially_sorted(points, None, measured)
+        normals = estimate_normals(points, progress=progress, spacing=measured)
+    else:
+        length = np.linalg.norm(normals, axis=1, keepdims=True)
+        normals = np.divide(normals, length, out=np.zeros_like(normals), where=length > 0)
+        points, normals = spatially_sorted(points, normals, measured)
     return Scene(points, normals, measured, geometry.source, False, notes=notes,
                  normals_estimated=estimated)
 
