@@ -11,7 +11,11 @@ Penetration depth is measured as fcl cannot for two meshes: as the smallest tran
 separates them, searched over a fixed set of 26 directions (the faces, edges and corners of a
 cube) and a ladder of lengths. An object resting on a surface that it crosses by a few
 millimetres (sampled test points, slanted seats) is freed by a short move; an object through a
-table top, a wall or a sofa is not.
+table top, a wall or a sofa is not. An object that is not freed has to be tried at every
+move; the triangle pairs found crossing at its pose and at the moves tried so far, with their
+neighbours, answer most of them (a move that leaves one of them crossing by a margin is
+blocked: :class:`Crossings`), so that fcl is asked only about the others (a person through a
+backrest: about a quarter of the moves).
 """
 
 from __future__ import annotations
@@ -51,6 +55,18 @@ def directions() -> np.ndarray:
     return d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
+#: The most triangle pairs a :class:`Crossings` keeps (the latest found first).
+CROSSING_KEPT = 256
+#: How many steps from a crossing body triangle, vertex to shared vertex, its neighbours
+#: join it in a :class:`Crossings`.
+CROSSING_RING = 2
+#: and the mesh's triangles that many steps from its crossing triangle
+CROSSING_SCENE_RING = 1
+#: How far (m) an edge must pass through a triangle's plane, and inside its edges, for
+#: :meth:`Crossings.kept` to take the two as crossing without fcl (far above rounding).
+CROSSING_MARGIN = 1e-6
+
+
 class MeshCollider:
     """A fixed triangle mesh (the scene) that posed bodies are tested against.
 
@@ -65,8 +81,16 @@ class MeshCollider:
     def __init__(self, vertices: np.ndarray, faces: np.ndarray, noise: float = 0.0):
         fcl = _fcl()
         self._fcl = fcl
-        self.object = fcl.CollisionObject(_bvh(vertices, faces), fcl.Transform())
+        self.vertices = np.asarray(vertices, np.float64)
+        self.faces = np.asarray(faces, np.int64)
+        self.object = fcl.CollisionObject(_bvh(self.vertices, self.faces), fcl.Transform())
         self.noise = float(noise)
+
+    @functools.cached_property
+    def ring(self):
+        """Each triangle's neighbours within :data:`CROSSING_SCENE_RING` steps
+        (:func:`ring`)."""
+        return ring(self.faces, CROSSING_SCENE_RING)
 
     def penetrates(self, body: "Body", pose: np.ndarray, depth: float) -> tuple[bool, float]:
         """The one penetration rule, for detection's collision test and the judge alike:
@@ -79,21 +103,45 @@ class MeshCollider:
 
     def collides(self, body: "Body", pose: np.ndarray) -> bool:
         """Whether ``body`` moved by the 4x4 ``pose`` intersects the mesh."""
+        return len(self.crossing_pairs(body, pose, 1)) > 0
+
+    def crossing_pairs(self, body: "Body", pose: np.ndarray,
+                       most: int = 1) -> np.ndarray:
+        """(n, 2) int64 pairs (the body's triangle, the mesh's) that cross with ``body`` at
+        the 4x4 ``pose``: fcl's first ``most`` (none: they do not intersect; fcl stops at the
+        first by default, and costs more the more it is asked for)."""
         fcl = self._fcl
         pose = np.asarray(pose, float)
         body.object.setTransform(fcl.Transform(pose[:3, :3], pose[:3, 3]))
-        return fcl.collide(body.object, self.object, fcl.CollisionRequest(),
-                           fcl.CollisionResult()) > 0
+        result = fcl.CollisionResult()
+        if not fcl.collide(body.object, self.object,
+                           fcl.CollisionRequest(num_max_contacts=most), result):
+            return np.zeros((0, 2), np.int64)
+        return np.array([(c.b1, c.b2) for c in result.contacts], np.int64).reshape(-1, 2)
 
-    def frees(self, body: "Body", pose: np.ndarray, length: float) -> bool:
+    def frees(self, body: "Body", pose: np.ndarray, length: float,
+              known: "Crossings | None" = None) -> bool:
         """Whether a move of ``length`` (m) in one of the 26 :func:`directions` takes
-        ``body`` (at ``pose``) clear of the mesh."""
-        moved = np.asarray(pose, float).copy()
-        for d in directions():
-            moved[:3, 3] = pose[:3, 3] + length * d
-            if not self.collides(body, moved):
-                return True
-        return False
+        ``body`` (at ``pose``) clear of the mesh. ``known``: triangle pairs found crossing
+        near this pose; a move that leaves one of them crossing (:meth:`Crossings.kept`) is
+        blocked without asking fcl, and the pairs fcl finds join them."""
+        pose = np.asarray(pose, float)
+        moves = length * directions()
+        if known is not None:
+            moves = moves[~known.kept(moves)]
+        moved = pose.copy()
+        found = []
+        try:
+            for move in moves:
+                moved[:3, 3] = pose[:3, 3] + move
+                pairs = self.crossing_pairs(body, moved)
+                if not len(pairs):
+                    return True
+                found.append(pairs)
+            return False
+        finally:
+            if known is not None and found:
+                known.add(np.vstack(found))
 
     def separation(self, body: "Body", pose: np.ndarray, lengths=(0.002, 0.005, 0.01, 0.02,
                                                                    0.05, 0.1, 0.2),
@@ -107,16 +155,144 @@ class MeshCollider:
         order: a move is not freer for being longer (a bowl on a counter with a board 5 mm
         above it is freed by 2 and 5 mm and blocked by 1 cm, where it hits the board; the
         judge, trying 1 cm first, once called such poses "penetrates deeply" or free as a
-        micrometre of rounding made them touch the counter or not)."""
+        micrometre of rounding made them touch the counter or not).
+
+        The triangle pairs found crossing at the pose and at the moves tried so far answer
+        the moves that leave one of them crossing (:class:`Crossings`): a body through a
+        backrest is blocked in most of its moves by a pair already known, and fcl is asked
+        only about the others (the answer is fcl's: a known pair is taken as crossing only
+        where it crosses by a margin)."""
         pose = np.asarray(pose, float)
-        if not self.collides(body, pose):
+        pairs = self.crossing_pairs(body, pose)
+        if not len(pairs):
             return 0.0
         if limit is not None:
             lengths = [x for x in lengths if x < limit] + [limit]
+        known = Crossings(self, body, pose, pairs)
         for length in lengths:
-            if self.frees(body, pose, length):
+            if self.frees(body, pose, length, known):
                 return float(length)
         return float("inf")
+
+
+class Crossings:
+    """Triangle pairs of a posed body and the scene's mesh known to cross, and which moves
+    of the body leave one of them crossing.
+
+    A pair is taken as crossing after a move when an edge of one of its triangles passes
+    through the other's plane and inside its edges, each by at least
+    :data:`CROSSING_MARGIN`: then they share a point, whatever fcl's rounding, and fcl
+    would find the body and the mesh intersecting. A move that leaves no known pair so is
+    not decided here."""
+
+    def __init__(self, collider: MeshCollider, body: "Body", pose: np.ndarray,
+                 pairs: np.ndarray):
+        self._collider, self._body = collider, body
+        self._rot, self._shift = pose[:3, :3], pose[:3, 3]
+        self.pairs = np.zeros((0, 2), np.int64)
+        self._keys = np.zeros(0, np.int64)
+        self._b, self._s = np.zeros((0, 3, 3)), np.zeros((0, 3, 3))
+        self._frames = (np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)),
+                        np.zeros((0, 3, 3)))
+        self.add(pairs)
+
+    def add(self, pairs: np.ndarray) -> None:
+        """Take in (n, 2) pairs (the body's triangle, the mesh's) found crossing, with the
+        body's triangles near theirs (:attr:`Body.ring`) against the same mesh triangle (a
+        move shifts a crossing onto the next triangles of the body); the latest found
+        first, :data:`CROSSING_KEPT` at most."""
+        from interaction_tensor.geometry._crossings import expand_pairs
+
+        body, scene = self._body, self._collider
+        near, scene_near = body.ring, scene.ring
+        new, keys = expand_pairs(np.ascontiguousarray(pairs, np.int64), near.indptr,
+                                 near.indices, scene_near.indptr, scene_near.indices,
+                                 len(scene.faces), CROSSING_KEPT)
+        old = ~np.isin(self._keys, keys)                  # those found again come first
+        tb = np.ascontiguousarray(body.vertices[body.faces[new[:, 0]]] @ self._rot.T
+                                  + self._shift)
+        ts = np.ascontiguousarray(scene.vertices[scene.faces[new[:, 1]]])
+        frames = _frames(ts) + _frames(tb)
+        cap = CROSSING_KEPT
+        self.pairs = np.concatenate([new, self.pairs[old]])[:cap]
+        self._keys = np.concatenate([keys, self._keys[old]])[:cap]
+        self._b = np.concatenate([tb, self._b[old]])[:cap]
+        self._s = np.concatenate([ts, self._s[old]])[:cap]
+        self._frames = tuple(np.ascontiguousarray(np.concatenate([a, was[old]])[:cap])
+                             for a, was in zip(frames, self._frames))
+
+    def kept(self, moves: np.ndarray, reference: bool = False) -> np.ndarray:
+        """(M,) bool: whether the body moved by each of ``moves`` (M, 3) leaves a known
+        pair crossing (a Numba kernel; ``reference``: NumPy, the rule it is tested
+        against)."""
+        moves = np.ascontiguousarray(moves, np.float64)
+        if not len(self.pairs):
+            return np.zeros(len(moves), bool)
+        if reference:
+            hit = (_edges_cross(self._b, self._s, moves, CROSSING_MARGIN)
+                   | _edges_cross(self._s, self._b, -moves, CROSSING_MARGIN))
+            return hit.any(axis=1)
+        from interaction_tensor.geometry._crossings import moves_kept
+
+        out = np.empty(len(moves), np.bool_)
+        moves_kept(self._b, self._s, *self._frames, moves, CROSSING_MARGIN, out)
+        return out
+
+
+def _frames(tri: np.ndarray):
+    """Of triangles (P, 3, 3): their unit normals (P, 3), zero where they have no area, and
+    their edges' unit normals in their plane, pointing in (P, 3 edges from each vertex,
+    3), by a Numba kernel."""
+    from interaction_tensor.geometry._crossings import frames
+
+    n, inward = np.empty((len(tri), 3)), np.empty((len(tri), 3, 3))
+    frames(tri, n, inward)
+    return n, inward
+
+
+def _edges_cross(moving: np.ndarray, fixed: np.ndarray, moves: np.ndarray,
+                 margin: float) -> np.ndarray:
+    """(M, P) bool: whether an edge of triangle ``moving[p]`` (P, 3, 3) moved by
+    ``moves[m]`` passes through triangle ``fixed[p]``: its ends on either side of the
+    triangle's plane, and the point where it crosses inside the triangle's three edges,
+    each by ``margin`` (m). A triangle of no area crosses nothing."""
+    e = np.roll(fixed, -1, axis=1) - fixed                      # (P, 3 edges, 3)
+    n = np.cross(e[:, 0], e[:, 1])
+    size = np.linalg.norm(n, axis=1)
+    flat = size > 1e-18
+    n = n / np.where(flat, size, 1.0)[:, None]
+    inward = np.cross(n[:, None], e)                            # (P, 3, 3): into the triangle
+    inward /= np.maximum(np.linalg.norm(inward, axis=2, keepdims=True), 1e-300)
+    a = moving[None] + moves[:, None, None]                     # (M, P, 3 vertices, 3)
+    b = np.roll(a, -1, axis=2)
+    da = np.einsum("mpvi,pi->mpv", a - fixed[None, :, :1], n)   # heights over the plane
+    db = np.einsum("mpvi,pi->mpv", b - fixed[None, :, :1], n)
+    through = ((da > margin) & (db < -margin)) | ((da < -margin) & (db > margin))
+    t = da / np.where(through, da - db, 1.0)
+    at = a + t[..., None] * (b - a)                             # (M, P, 3 edges, 3)
+    inside = np.einsum("mpvi,pji->mpvj", at, inward) - np.einsum("pji,pji->pj", fixed,
+                                                                 inward)[None, :, None]
+    return (through & (inside > margin).all(axis=3)).any(axis=2) & flat[None]
+
+
+def ring(faces: np.ndarray, steps: int = 1):
+    """Each triangle's neighbours: those within ``steps`` steps of it from vertex to shared
+    vertex, itself left out (a SciPy CSR matrix, row by triangle)."""
+    from scipy import sparse
+
+    f = len(faces)
+    incidence = sparse.csr_matrix((np.ones(3 * f), (np.repeat(np.arange(f), 3),
+                                                     np.asarray(faces).ravel())),
+                                  shape=(f, int(np.max(faces)) + 1 if f else 0))
+    step = (incidence @ incidence.T).tocsr()
+    near = step
+    for _ in range(steps - 1):
+        near = near @ step
+    near = near.tocsr()
+    near.setdiag(0)
+    near.eliminate_zeros()
+    near.sort_indices()
+    return near
 
 
 class Body:
@@ -136,6 +312,11 @@ class Body:
         """The python-fcl collision object of the triangles."""
         fcl = _fcl()
         return fcl.CollisionObject(_bvh(self.vertices, self.faces), fcl.Transform())
+
+    @functools.cached_property
+    def ring(self):
+        """Each triangle's neighbours within :data:`CROSSING_RING` steps (:func:`ring`)."""
+        return ring(self.faces, CROSSING_RING)
 
     def __len__(self) -> int:
         return len(self.faces)
