@@ -5,9 +5,11 @@
     python benchmarks/run.py --protocol          # also the paper's protocol (14 scenes x 8)
     python benchmarks/run.py --baseline REV      # and the same cases on git revision REV
 
-Writes every figure to ``results/benchmarks/results.json`` (git-ignored) and the summary,
-``benchmarks/RESULTS.md``, which it overwrites: each figure with its command, the machine and,
-where there is one, the ratio to the reference measured in the same run. Each case runs in a
+Writes every figure to ``benchmarks/results.json`` and the summary drawn from it,
+``benchmarks/RESULTS.md``, overwriting both: each figure with its command, the machine and,
+where there is one, the ratio to the reference measured in the same run. A run of some cases
+(``--only``) keeps the other cases' figures of their last run, so both files always hold
+every case. Each case runs in a
 process of its own, after the kernels are compiled (except the first-run case, which measures
 compilation). The data come from ../shared/data (or $ITENSOR_SHARED_DATA).
 
@@ -615,7 +617,7 @@ def main() -> None:
         one(args.one)
         return
     # the cases not run now keep their figures of the last run (each case's own run is noted)
-    previous = OUT / "results.json"
+    previous = HERE / "results.json"
     res = json.loads(previous.read_text()) if previous.exists() and args.only != list(CASES) \
         else {}
     res["machine"] = machine()
@@ -650,10 +652,9 @@ def main() -> None:
         elif "baseline" in res:
             res["baseline"].pop(name, None)
         print(f"{name}: {time.perf_counter() - t:.0f} s", flush=True)
-    OUT.mkdir(parents=True, exist_ok=True)
-    (OUT / "results.json").write_text(json.dumps(res, indent=1))
+    (HERE / "results.json").write_text(json.dumps(res, indent=1) + "\n")
     (HERE / "RESULTS.md").write_text(markdown(res))
-    print(f"wrote {OUT / 'results.json'} and {HERE / 'RESULTS.md'}")
+    print(f"wrote {HERE / 'results.json'} and {HERE / 'RESULTS.md'}")
 
 
 if __name__ == "__main__":
