@@ -14,6 +14,7 @@ from interaction_tensor.detection.result import Detection
 from interaction_tensor.engine.backends import resolve_backend
 from interaction_tensor.engine.numba_backend import score_pairs_numba
 from interaction_tensor.engine.scoring import score_pairs
+from interaction_tensor.geometry.collision import CrossingMemory
 from interaction_tensor.placement import hooks, taps
 from interaction_tensor.placement.checks import (
     FAILS_COLLISION,
@@ -79,6 +80,7 @@ class CollisionCheck:
         self.seconds = 0.0
         self.exhausted = False
         self._flats = None
+        self.memory = CrossingMemory()     # the pairs found crossing, by orientation
 
     def free(self, i: int):
         """Whether pair ``i`` passes the tests: True, False, or None when it is not tested
@@ -113,7 +115,7 @@ class CollisionCheck:
             if not ok:
                 self.failed_filling += 1
         for body, depth in tensor.collision_bodies() if ok and collider is not None else ():
-            if collider.penetrates(body, pose, depth)[0]:
+            if collider.penetrates(body, pose, depth, self.memory)[0]:
                 ok = False
                 break
         self.tests += 1

@@ -3,7 +3,8 @@ moves of a posed body leave one of the triangle pairs known to cross still cross
 same rule as :func:`~interaction_tensor.geometry.collision._edges_cross`)."""
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.typed import Dict
 
 
 @njit(cache=True)
@@ -37,15 +38,24 @@ def _through(moving, sx, sy, sz, fixed, n, inward, margin):
 
 
 @njit(cache=True)
-def moves_kept(body, scene, scene_n, scene_in, body_n, body_in, moves, margin, out):
+def moves_kept(body, scene, scene_n, scene_in, body_n, body_in, box, head, count, moves,
+               margin, out):
     """``out[m]``: whether, with ``body`` (P, 3, 3) moved by ``moves[m]``, some pair
     ``body[p]``, ``scene[p]`` still crosses (an edge of either through the other; each
-    triangle's unit normal and inward edge normals given, the body's at its pose); pairs
-    are tried in order, and a move stops at the first that crosses."""
+    triangle's unit normal and inward edge normals given, the body's at its pose). The
+    ``count`` pairs are a ring of slots, tried the latest written first (slot ``head`` - 1,
+    backwards), and a move stops at the first that crosses; a pair whose triangles'
+    bounding boxes the move does not make meet (``box``: the moves that do, low and high)
+    cannot cross, and is passed over."""
+    cap = body.shape[0]
     for m in range(moves.shape[0]):
         out[m] = False
         mx, my, mz = moves[m, 0], moves[m, 1], moves[m, 2]
-        for p in range(body.shape[0]):
+        for q in range(count):
+            p = (head - 1 - q) % cap
+            if (mx < box[p, 0, 0] or mx > box[p, 1, 0] or my < box[p, 0, 1]
+                    or my > box[p, 1, 1] or mz < box[p, 0, 2] or mz > box[p, 1, 2]):
+                continue
             if _through(body[p], mx, my, mz, scene[p], scene_n[p], scene_in[p], margin):
                 out[m] = True
                 break
@@ -113,3 +123,55 @@ def expand_pairs(pairs, body_ptr, body_near, scene_ptr, scene_near, scene_faces,
             out[m, 0], out[m, 1], keys[m] = t, u, key
             m += 1
     return out[:m], keys[:m]
+
+
+
+@njit(cache=True)
+def new_index():
+    """An empty key -> slot table of a :class:`~.collision.Crossings`' pairs."""
+    return Dict.empty(key_type=types.int64, value_type=types.int64)
+
+
+@njit(cache=True)
+def rebuild_index(keys, count, index):
+    """Fill ``index`` with the slots of the first ``count`` ``keys``."""
+    index.clear()
+    for i in range(count):
+        index[keys[i]] = i
+
+
+@njit(cache=True)
+def insert_pairs(new, new_keys, body_v, body_f, rot, shift, scene_v, scene_f, pairs, keys,
+                 b, s, sn, si, bn, bi, box, state, index):
+    """Write the pairs ``new`` (n, 2) of ``new_keys`` that are not in ``index`` (key ->
+    slot) into the ring of slots (``state``: the next slot to write, the slots filled),
+    over the oldest once every slot is filled, the first of ``new`` written last: their triangles (the body's posed by ``rot``,
+    ``shift``; the scene's as they are), :func:`frames` (the scene's, then the body's) and
+    ``box``, the moves of the body that make the two triangles' bounding boxes meet (low,
+    high)."""
+    cap = keys.shape[0]
+    for i in range(new.shape[0] - 1, -1, -1):        # the first (the pair found) last
+        key = new_keys[i]
+        if key in index:
+            continue
+        slot = state[0]
+        if state[1] == cap:
+            del index[keys[slot]]
+        else:
+            state[1] += 1
+        state[0] = (slot + 1) % cap
+        index[key] = slot
+        pairs[slot, 0], pairs[slot, 1], keys[slot] = new[i, 0], new[i, 1], key
+        for v in range(3):
+            p = body_v[body_f[new[i, 0], v]]
+            for a in range(3):
+                b[slot, v, a] = (rot[a, 0] * p[0] + rot[a, 1] * p[1] + rot[a, 2] * p[2]
+                                 + shift[a])
+                s[slot, v, a] = scene_v[scene_f[new[i, 1], v], a]
+        frames(s[slot:slot + 1], sn[slot:slot + 1], si[slot:slot + 1])
+        frames(b[slot:slot + 1], bn[slot:slot + 1], bi[slot:slot + 1])
+        for a in range(3):
+            box[slot, 0, a] = (min(s[slot, 0, a], s[slot, 1, a], s[slot, 2, a])
+                               - max(b[slot, 0, a], b[slot, 1, a], b[slot, 2, a]))
+            box[slot, 1, a] = (max(s[slot, 0, a], s[slot, 1, a], s[slot, 2, a])
+                               - min(b[slot, 0, a], b[slot, 1, a], b[slot, 2, a]))

@@ -15,7 +15,9 @@ table top, a wall or a sofa is not. An object that is not freed has to be tried 
 move; the triangle pairs found crossing at its pose and at the moves tried so far, with their
 neighbours, answer most of them (a move that leaves one of them crossing by a margin is
 blocked: :class:`Crossings`), so that fcl is asked only about the others (a person through a
-backrest: about a quarter of the moves).
+backrest: about a quarter of the moves). Detection's tests keep those pairs from pose to pose
+of one orientation (:class:`CrossingMemory`): the next test point along the same backrest is
+then answered by them at nearly every move.
 """
 
 from __future__ import annotations
@@ -48,15 +50,27 @@ def _bvh(vertices: np.ndarray, faces: np.ndarray):
     return m
 
 
-def directions() -> np.ndarray:
-    """(26, 3) unit directions: the faces, edges and corners of a cube, +Z first."""
+def _directions() -> np.ndarray:
     d = np.array([(i, j, k) for k in (1, 0, -1) for i in (0, 1, -1) for j in (0, 1, -1)
                   if (i, j, k) != (0, 0, 0)], float)
     return d / np.linalg.norm(d, axis=1, keepdims=True)
 
 
-#: The most triangle pairs a :class:`Crossings` keeps (the latest found first).
-CROSSING_KEPT = 256
+_DIRECTIONS = _directions()
+
+
+def directions() -> np.ndarray:
+    """(26, 3) unit directions: the faces, edges and corners of a cube, +Z first."""
+    return _DIRECTIONS.copy()
+
+
+#: The most triangle pairs a :class:`Crossings` keeps (the oldest written over first): a
+#: seated person's tests along a sofa find a few thousand, and fewer send most moves to fcl
+#: again (living-room4: 256 kept, 88,692 fcl calls; 1,024, 54,737; 4,096, 16,582).
+CROSSING_KEPT = 4096
+#: The most :class:`Crossings` a :class:`CrossingMemory` holds (the oldest dropped first):
+#: one per body and orientation, up to about 1.7 MB each.
+MEMORY_KEPT = 64
 #: How many steps from a crossing body triangle, vertex to shared vertex, its neighbours
 #: join it in a :class:`Crossings`.
 CROSSING_RING = 2
@@ -92,13 +106,15 @@ class MeshCollider:
         (:func:`ring`)."""
         return ring(self.faces, CROSSING_SCENE_RING)
 
-    def penetrates(self, body: "Body", pose: np.ndarray, depth: float) -> tuple[bool, float]:
+    def penetrates(self, body: "Body", pose: np.ndarray, depth: float,
+                   memory: "CrossingMemory | None" = None) -> tuple[bool, float]:
         """The one penetration rule, for detection's collision test and the judge alike:
         whether ``body`` at ``pose`` lies more than ``depth`` (m) plus the surface's
         :attr:`noise` inside the mesh (no tried move of at most that length frees it), and
-        the move that frees it (:meth:`separation` up to that length; ``inf`` past it)."""
+        the move that frees it (:meth:`separation` up to that length; ``inf`` past it).
+        ``memory``: the crossings found at earlier poses (:meth:`separation`)."""
         allowed = depth + self.noise
-        sep = self.separation(body, pose, limit=allowed)
+        sep = self.separation(body, pose, limit=allowed, memory=memory)
         return sep > allowed, sep
 
     def collides(self, body: "Body", pose: np.ndarray) -> bool:
@@ -123,12 +139,13 @@ class MeshCollider:
               known: "Crossings | None" = None) -> bool:
         """Whether a move of ``length`` (m) in one of the 26 :func:`directions` takes
         ``body`` (at ``pose``) clear of the mesh. ``known``: triangle pairs found crossing
-        near this pose; a move that leaves one of them crossing (:meth:`Crossings.kept`) is
-        blocked without asking fcl, and the pairs fcl finds join them."""
+        at this pose or another of the same orientation; a move that leaves one of them
+        crossing (:meth:`Crossings.kept`) is blocked without asking fcl, and the pairs fcl
+        finds join them."""
         pose = np.asarray(pose, float)
-        moves = length * directions()
+        moves = length * _DIRECTIONS
         if known is not None:
-            moves = moves[~known.kept(moves)]
+            moves = moves[~known.kept(moves + known.offset(pose))]
         moved = pose.copy()
         found = []
         try:
@@ -145,7 +162,8 @@ class MeshCollider:
 
     def separation(self, body: "Body", pose: np.ndarray, lengths=(0.002, 0.005, 0.01, 0.02,
                                                                    0.05, 0.1, 0.2),
-                   limit: float | None = None) -> float:
+                   limit: float | None = None,
+                   memory: "CrossingMemory | None" = None) -> float:
         """Smallest of ``lengths`` (m) by which ``body`` can be moved in one of the 26
         :func:`directions` so that it no longer intersects the mesh: 0 when it does not
         intersect at its pose, ``inf`` when no tried move frees it. An upper bound of the
@@ -161,14 +179,22 @@ class MeshCollider:
         the moves that leave one of them crossing (:class:`Crossings`): a body through a
         backrest is blocked in most of its moves by a pair already known, and fcl is asked
         only about the others (the answer is fcl's: a known pair is taken as crossing only
-        where it crosses by a margin)."""
+        where it crosses by a margin). With ``memory``, the pairs found at earlier poses of
+        the body in the same orientation answer this pose's moves as well, and the pose
+        itself (a seat's next test point, 1 cm along the same backrest), and the pairs found
+        here join them."""
         pose = np.asarray(pose, float)
-        pairs = self.crossing_pairs(body, pose)
-        if not len(pairs):
-            return 0.0
+        known = None if memory is None else memory.recall(self, body, pose)
+        if True:
+            pairs = self.crossing_pairs(body, pose)
+            if not len(pairs):
+                return 0.0
+            if known is None:
+                known = Crossings(self, body, pose, pairs)
+            else:
+                known.add(pairs)
         if limit is not None:
             lengths = [x for x in lengths if x < limit] + [limit]
-        known = Crossings(self, body, pose, pairs)
         for length in lengths:
             if self.frees(body, pose, length, known):
                 return float(length)
@@ -188,66 +214,119 @@ class Crossings:
     def __init__(self, collider: MeshCollider, body: "Body", pose: np.ndarray,
                  pairs: np.ndarray):
         self._collider, self._body = collider, body
-        self._rot, self._shift = pose[:3, :3], pose[:3, 3]
-        self.pairs = np.zeros((0, 2), np.int64)
-        self._keys = np.zeros(0, np.int64)
-        self._b, self._s = np.zeros((0, 3, 3)), np.zeros((0, 3, 3))
-        self._frames = (np.zeros((0, 3)), np.zeros((0, 3, 3)), np.zeros((0, 3)),
-                        np.zeros((0, 3, 3)))
+        self._rot, self._shift = pose[:3, :3].copy(), pose[:3, 3].copy()
+        self._state = np.zeros(2, np.int64)           # the next slot written, slots filled
+        self._index = None                            # key -> slot (a Numba table)
+        self._grow(0)
         self.add(pairs)
+
+    def _grow(self, size: int) -> None:
+        """Room for ``size`` pairs, the pairs kept in order (oldest first)."""
+        head, count = self._state
+        old = getattr(self, "_slots", None)
+        order = (head - count + np.arange(count)) % max(len(self._keys), 1) if count else []
+        shapes = ((2,), (), (3, 3), (3, 3), (3,), (3, 3), (3,), (3, 3), (2, 3))
+        kinds = (np.int64, np.int64) + (np.float64,) * 7
+        self._slots = [np.zeros((size,) + sh, k) for sh, k in zip(shapes, kinds)]
+        if old is not None and count:
+            for new, was in zip(self._slots, old):
+                new[:count] = was[order]
+        self._state[:] = (count % size if size else 0, count)
+        if self._index is not None:
+            from interaction_tensor.geometry._crossings import rebuild_index
+
+            rebuild_index(self._keys, count, self._index)
+
+    @property
+    def _keys(self) -> np.ndarray:
+        return self._slots[1]
+
+    @property
+    def pairs(self) -> np.ndarray:
+        """(n, 2) the pairs known to cross (the body's triangle, the mesh's), the latest
+        found first."""
+        head, count = self._state
+        return self._slots[0][(head - 1 - np.arange(count)) % max(len(self._keys), 1)]
 
     def add(self, pairs: np.ndarray) -> None:
         """Take in (n, 2) pairs (the body's triangle, the mesh's) found crossing, with the
         body's triangles near theirs (:attr:`Body.ring`) against the same mesh triangle (a
-        move shifts a crossing onto the next triangles of the body); the latest found
-        first, :data:`CROSSING_KEPT` at most."""
-        from interaction_tensor.geometry._crossings import expand_pairs
+        move shifts a crossing onto the next triangles of the body); :data:`CROSSING_KEPT`
+        at most, the oldest written over first."""
+        from interaction_tensor.geometry._crossings import (
+            expand_pairs,
+            insert_pairs,
+            new_index,
+        )
 
+        if not len(pairs) or CROSSING_KEPT <= 0:
+            return
         body, scene = self._body, self._collider
         near, scene_near = body.ring, scene.ring
         new, keys = expand_pairs(np.ascontiguousarray(pairs, np.int64), near.indptr,
                                  near.indices, scene_near.indptr, scene_near.indices,
                                  len(scene.faces), CROSSING_KEPT)
-        old = ~np.isin(self._keys, keys)                  # those found again come first
-        tb = np.ascontiguousarray(body.vertices[body.faces[new[:, 0]]] @ self._rot.T
-                                  + self._shift)
-        ts = np.ascontiguousarray(scene.vertices[scene.faces[new[:, 1]]])
-        frames = _frames(ts) + _frames(tb)
-        cap = CROSSING_KEPT
-        self.pairs = np.concatenate([new, self.pairs[old]])[:cap]
-        self._keys = np.concatenate([keys, self._keys[old]])[:cap]
-        self._b = np.concatenate([tb, self._b[old]])[:cap]
-        self._s = np.concatenate([ts, self._s[old]])[:cap]
-        self._frames = tuple(np.ascontiguousarray(np.concatenate([a, was[old]])[:cap])
-                             for a, was in zip(frames, self._frames))
+        if self._index is None:
+            self._index = new_index()
+        room = len(self._keys)
+        if self._state[1] + len(new) > room and room < CROSSING_KEPT:
+            self._grow(min(CROSSING_KEPT, max(2 * room, 64, int(self._state[1]) + len(new))))
+        insert_pairs(new, keys, body.vertices, body.faces, self._rot, self._shift,
+                     scene.vertices, scene.faces, *self._slots, self._state, self._index)
+
+    def offset(self, pose: np.ndarray) -> np.ndarray:
+        """(3,) the move from the pose these pairs were posed at to ``pose``, which must
+        turn the body the same way (a ``ValueError`` otherwise)."""
+        pose = np.asarray(pose, float)
+        if not np.array_equal(pose[:3, :3], self._rot):
+            raise ValueError("the pose turns the body otherwise than the known crossings")
+        return pose[:3, 3] - self._shift
 
     def kept(self, moves: np.ndarray, reference: bool = False) -> np.ndarray:
-        """(M,) bool: whether the body moved by each of ``moves`` (M, 3) leaves a known
-        pair crossing (a Numba kernel; ``reference``: NumPy, the rule it is tested
-        against)."""
+        """(M,) bool: whether the body moved by each of ``moves`` (M, 3) from the pose the
+        pairs were posed at (:meth:`offset`) leaves a known pair crossing (a Numba kernel;
+        ``reference``: NumPy, the rule it is tested against)."""
         moves = np.ascontiguousarray(moves, np.float64)
-        if not len(self.pairs):
+        head, count = (int(x) for x in self._state)
+        if not count:
             return np.zeros(len(moves), bool)
+        b, s = self._slots[2][:count], self._slots[3][:count]
         if reference:
-            hit = (_edges_cross(self._b, self._s, moves, CROSSING_MARGIN)
-                   | _edges_cross(self._s, self._b, -moves, CROSSING_MARGIN))
+            hit = (_edges_cross(b, s, moves, CROSSING_MARGIN)
+                   | _edges_cross(s, b, -moves, CROSSING_MARGIN))
             return hit.any(axis=1)
         from interaction_tensor.geometry._crossings import moves_kept
 
         out = np.empty(len(moves), np.bool_)
-        moves_kept(self._b, self._s, *self._frames, moves, CROSSING_MARGIN, out)
+        moves_kept(*self._slots[2:], head, count, moves, CROSSING_MARGIN, out)
         return out
 
 
-def _frames(tri: np.ndarray):
-    """Of triangles (P, 3, 3): their unit normals (P, 3), zero where they have no area, and
-    their edges' unit normals in their plane, pointing in (P, 3 edges from each vertex,
-    3), by a Numba kernel."""
-    from interaction_tensor.geometry._crossings import frames
+class CrossingMemory:
+    """The :class:`Crossings` of a body at earlier poses, one per body and orientation
+    (its rotation, exactly), for :meth:`MeshCollider.separation`: a detection tests many
+    poses of one orientation a centimetre apart (the test points along one backrest), and
+    the pairs found crossing at one of them answer most moves of the next. A pose in
+    another place merely finds none of them crossing; the latest found are kept
+    (:data:`CROSSING_KEPT`, and :data:`MEMORY_KEPT` orientations and bodies)."""
 
-    n, inward = np.empty((len(tri), 3)), np.empty((len(tri), 3, 3))
-    frames(tri, n, inward)
-    return n, inward
+    def __init__(self):
+        self._known: dict = {}
+
+    def recall(self, collider: MeshCollider, body: "Body",
+               pose: np.ndarray) -> "Crossings":
+        """The crossings known of ``body`` against ``collider`` in ``pose``'s orientation
+        (none yet: an empty one, posed at ``pose``)."""
+        pose = np.asarray(pose, float)
+        key = (id(collider), id(body), np.ascontiguousarray(pose[:3, :3]).tobytes())
+        known = self._known.get(key)
+        if known is None or known._collider is not collider or known._body is not body:
+            known = Crossings(collider, body, pose, np.zeros((0, 2), np.int64))
+            self._known.pop(key, None)
+            while len(self._known) >= MEMORY_KEPT:
+                del self._known[next(iter(self._known))]
+            self._known[key] = known
+        return known
 
 
 def _edges_cross(moving: np.ndarray, fixed: np.ndarray, moves: np.ndarray,
