@@ -1,6 +1,7 @@
-"""The Numba kernel of :meth:`~interaction_tensor.geometry.collision.Crossings.kept`: which
+"""The Numba kernels of :class:`~interaction_tensor.geometry.collision.Crossings`: which
 moves of a posed body leave one of the triangle pairs known to cross still crossing (the
-same rule as :func:`~interaction_tensor.geometry.collision._edges_cross`)."""
+same rule as :func:`~interaction_tensor.geometry.collision._edges_cross`), and the pairs'
+ring of slots, written as fcl finds them."""
 
 import numpy as np
 from numba import njit, types
@@ -125,7 +126,6 @@ def expand_pairs(pairs, body_ptr, body_near, scene_ptr, scene_near, scene_faces,
     return out[:m], keys[:m]
 
 
-
 @njit(cache=True)
 def new_index():
     """An empty key -> slot table of a :class:`~.collision.Crossings`' pairs."""
@@ -145,10 +145,10 @@ def insert_pairs(new, new_keys, body_v, body_f, rot, shift, scene_v, scene_f, pa
                  b, s, sn, si, bn, bi, box, state, index):
     """Write the pairs ``new`` (n, 2) of ``new_keys`` that are not in ``index`` (key ->
     slot) into the ring of slots (``state``: the next slot to write, the slots filled),
-    over the oldest once every slot is filled, the first of ``new`` written last: their triangles (the body's posed by ``rot``,
-    ``shift``; the scene's as they are), :func:`frames` (the scene's, then the body's) and
-    ``box``, the moves of the body that make the two triangles' bounding boxes meet (low,
-    high)."""
+    over the oldest once every slot is filled, the first of ``new`` written last: their
+    triangles (the body's posed by ``rot``, ``shift``; the scene's as they are),
+    :func:`frames` (the scene's, then the body's) and ``box``, the moves of the body that
+    make the two triangles' bounding boxes meet (low, high)."""
     cap = keys.shape[0]
     for i in range(new.shape[0] - 1, -1, -1):        # the first (the pair found) last
         key = new_keys[i]

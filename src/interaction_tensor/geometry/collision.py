@@ -180,19 +180,17 @@ class MeshCollider:
         backrest is blocked in most of its moves by a pair already known, and fcl is asked
         only about the others (the answer is fcl's: a known pair is taken as crossing only
         where it crosses by a margin). With ``memory``, the pairs found at earlier poses of
-        the body in the same orientation answer this pose's moves as well, and the pose
-        itself (a seat's next test point, 1 cm along the same backrest), and the pairs found
-        here join them."""
+        the body in the same orientation (a seat's last test point, 1 cm along the same
+        backrest) answer this pose's moves as well, and the pairs found here join them."""
         pose = np.asarray(pose, float)
-        known = None if memory is None else memory.recall(self, body, pose)
-        if True:
-            pairs = self.crossing_pairs(body, pose)
-            if not len(pairs):
-                return 0.0
-            if known is None:
-                known = Crossings(self, body, pose, pairs)
-            else:
-                known.add(pairs)
+        pairs = self.crossing_pairs(body, pose)
+        if not len(pairs):
+            return 0.0
+        if memory is None:
+            known = Crossings(self, body, pose, pairs)
+        else:
+            known = memory.recall(self, body, pose)
+            known.add(pairs)
         if limit is not None:
             lengths = [x for x in lengths if x < limit] + [limit]
         for length in lengths:
@@ -225,6 +223,8 @@ class Crossings:
         head, count = self._state
         old = getattr(self, "_slots", None)
         order = (head - count + np.arange(count)) % max(len(self._keys), 1) if count else []
+        # pairs, keys, the body's and the scene's triangles, the scene's normals and inward
+        # edge normals, the body's, and the moves that make their boxes meet (low, high)
         shapes = ((2,), (), (3, 3), (3, 3), (3,), (3, 3), (3,), (3, 3), (2, 3))
         kinds = (np.int64, np.int64) + (np.float64,) * 7
         self._slots = [np.zeros((size,) + sh, k) for sh, k in zip(shapes, kinds)]
