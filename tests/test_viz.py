@@ -233,7 +233,9 @@ def test_page_in_headless_chromium(outdir, tmp_path, renderer, record_property):
 def test_the_splat_kernel_fills_the_z_buffer_as_the_numpy_reference():
     """The Numba splat and the NumPy reference give the same depths, colours, normals and
     lighting, pixel for pixel: lit oriented splats of a room, unlit ones over them, fixed
-    radii, points behind the camera and off the picture."""
+    radii, points behind the camera and off the picture, and ties: points drawn again at
+    the same depths take the pixels they won, and, within one call, the later of two
+    points at one depth wins."""
     from interaction_tensor.geometry.sampling import sample_mesh
     from interaction_tensor.outputs.raster import Canvas, frame_points
 
@@ -247,7 +249,9 @@ def test_the_splat_kernel_fills_the_z_buffer_as_the_numpy_reference():
     canvases = []
     for reference in (True, False):
         c = Canvas(cam)
-        c.points(pts, colours, nrm, size=0.015, reference=reference)
+        c.points(np.vstack([pts, pts[::3]]), np.vstack([colours, colours[::3] // 2]),
+                 np.vstack([nrm, -nrm[::3]]), size=0.015, reference=reference)
+        c.points(pts[::7], (90, 90, 250), nrm[::7], size=0.015, reference=reference)
         c.points(pts[::5] + 0.003, (10, 20, 30), size=0.015, lit=False, reference=reference)
         c.points(pts[::40], (200, 0, 0), radius_px=2, lit=False, reference=reference)
         canvases.append(c)

@@ -169,43 +169,22 @@ class Canvas:
         colour is drawn as is. The z-buffer is filled by a Numba kernel (:mod:`._splat`);
         ``reference``: by the NumPy reference instead (the same picture, slower).
         """
-        pts = np.asarray(points, float)
+        pts = np.ascontiguousarray(points, float)
         if len(pts) == 0:
             return
-        cols = np.broadcast_to(np.asarray(colors, np.float32) / 255.0, (len(pts), 3))
-        px, py, z, rel = self.cam._project(pts)
-        keep = (z > self.cam.near) & (px > -50) & (px < self.w + 50) & (py > -50) & \
-            (py < self.h + 50) & np.isfinite(px) & np.isfinite(py)
-        if not keep.any():
+        normals = np.ascontiguousarray(normals, float) if normals is not None and lit \
+            else None
+        half_size = 0.5 * (0.01 if size is None else size)
+        fixed = -1 if radius_px is None else int(radius_px) * self.ss
+        prepared = (self._prepare_reference if reference else self._prepare)(
+            pts, normals, half_size, fixed)
+        if prepared is None:
             return
-        idx = np.flatnonzero(keep)
-        px, py, z, rel = px[idx], py[idx], z[idx], rel[idx]
-        if radius_px is not None:
-            rad = np.full(len(idx), int(radius_px) * self.ss)
-        else:
-            size = 0.01 if size is None else size
-            rad = np.rint(0.5 * size * self.cam.focal / z).astype(int)
-            rad = np.clip(rad, 0, self.MAX_SPLAT_RADIUS)
-        nrm = None
-        if normals is not None and lit:
-            nrm = np.asarray(normals, float)[idx]
-            # in the camera's frame; turned to face the camera (away from the point's ray)
-            abc = nrm @ self.cam.axes.T
-            sign = np.where(np.einsum("ij,ij->i", abc, rel) > 0, -1.0, 1.0)
-            nrm *= sign[:, None]
-            abc *= sign[:, None]
-        ix, iy = np.rint(px).astype(np.int64), np.rint(py).astype(np.int64)
-        # oriented splats: depth follows each point's tangent plane across its disk, so
-        # overlapping splats of one surface blend into a smooth surface
-        gx = gy = None
-        if nrm is not None:
-            a, b, c = abc[:, 0], abc[:, 1], abc[:, 2]
-            c = np.where(c < 0, np.minimum(c, -0.35), np.maximum(c, 0.35))
-            gx = (-a / c * z / self.cam.focal).astype(np.float32)
-            gy = (b / c * z / self.cam.focal).astype(np.float32)
+        idx, ix, iy, z, rad, nrm, gx, gy = prepared
         if not reference:
-            self._splat(ix, iy, z, gx, gy, rad, cols[idx], nrm)
+            self._splat(ix, iy, z, gx, gy, rad, idx, colors, nrm)
             return
+        cols = np.broadcast_to(np.asarray(colors, np.float32) / 255.0, (len(pts), 3))[idx]
         for r in np.unique(rad):
             sel = np.flatnonzero(rad == r)
             dx, dy = _disk(r)
@@ -225,17 +204,83 @@ class Canvas:
                     d = d + gx[src] * ddx + gy[src] * ddy
                 np.minimum.at(self.depth, flat, d)
                 win = d <= self.depth[flat]
-                self._paint(flat[win], src[win], cols[idx], nrm)
+                self._paint(flat[win], src[win], cols, nrm)
 
-    def _splat(self, ix, iy, z, gx, gy, rad, cols, nrm) -> None:
-        """The reference's splats, smallest disks first, by one Numba kernel
-        (:func:`~._splat.splat`) in bands of rows, then the winners painted."""
+    def _prepare_reference(self, pts, normals, half_size, fixed):
+        """The points in the picture's reach and, for each, its pixel, depth and splat
+        radius (``fixed`` pixels, or covering ``half_size`` m either side), with
+        ``normals`` its normal turned to face the camera and its depth's slopes across the
+        disk: (idx, ix, iy, z, radius, normals or None, gx or None, gy or None), or None
+        where no point is in reach. NumPy, in the arithmetic of :func:`~._splat.prepare`."""
+        cam, ax = self.cam, self.cam.axes
+        d = pts - cam.eye
+        c0, c1, c2 = (d[:, 0] * ax[k, 0] + d[:, 1] * ax[k, 1] + d[:, 2] * ax[k, 2]
+                      for k in range(3))
+        zs = np.where(np.abs(c2) > 1e-9, c2, 1e-9)
+        px = 0.5 * self.w + cam.focal * c0 / zs
+        py = 0.5 * self.h - cam.focal * c1 / zs
+        keep = (c2 > cam.near) & (px > -50) & (px < self.w + 50) & (py > -50) & \
+            (py < self.h + 50) & np.isfinite(px) & np.isfinite(py)
+        if not keep.any():
+            return None
+        idx = np.flatnonzero(keep)
+        c0, c1, z, px, py = c0[idx], c1[idx], c2[idx], px[idx], py[idx]
+        if fixed >= 0:
+            rad = np.full(len(idx), fixed, np.int64)
+        else:
+            rad = np.clip(np.rint(half_size * cam.focal / z).astype(np.int64), 0,
+                          self.MAX_SPLAT_RADIUS)
+        ix, iy = np.rint(px).astype(np.int64), np.rint(py).astype(np.int64)
+        if normals is None:
+            return idx, ix, iy, z, rad, None, None, None
+        # oriented splats: depth follows each point's tangent plane across its disk, so
+        # overlapping splats of one surface blend into a smooth surface
+        n = normals[idx]
+        a, b, c = (n[:, 0] * ax[k, 0] + n[:, 1] * ax[k, 1] + n[:, 2] * ax[k, 2]
+                   for k in range(3))
+        sign = np.where(a * c0 + b * c1 + c * z > 0, -1.0, 1.0)
+        n *= sign[:, None]
+        a, b, c = a * sign, b * sign, c * sign
+        c = np.where(c < 0, np.minimum(c, -0.35), np.maximum(c, 0.35))
+        gx = (-a / c * z / cam.focal).astype(np.float32)
+        gy = (b / c * z / cam.focal).astype(np.float32)
+        return idx, ix, iy, z, rad, n, gx, gy
+
+    def _prepare(self, pts, normals, half_size, fixed):
+        """:meth:`_prepare_reference` by two Numba kernels (:func:`~._splat.visible`,
+        :func:`~._splat.prepare`): the same values."""
+        from interaction_tensor.outputs._splat import prepare, visible
+
+        cam = self.cam
+        eye, axes = np.ascontiguousarray(cam.eye, float), np.ascontiguousarray(cam.axes)
+        keep = np.empty(len(pts), bool)
+        visible(pts, eye, axes, float(cam.focal), self.w, self.h, float(cam.near), keep)
+        idx = np.flatnonzero(keep)
+        if len(idx) == 0:
+            return None
+        m = len(idx)
+        shaded = normals is not None
+        ix, iy, rad = np.empty(m, np.int64), np.empty(m, np.int64), np.empty(m, np.int64)
+        z = np.empty(m)
+        nrm = np.empty((m if shaded else 0, 3))
+        gx, gy = np.empty(m if shaded else 0, np.float32), np.empty(m if shaded else 0,
+                                                                    np.float32)
+        prepare(pts, normals if shaded else np.zeros((0, 3)), idx, eye, axes,
+                float(cam.focal), self.w, self.h, float(half_size), int(fixed),
+                self.MAX_SPLAT_RADIUS, ix, iy, z, rad, nrm, gx, gy)
+        if not shaded:
+            return idx, ix, iy, z, rad, None, None, None
+        return idx, ix, iy, z, rad, nrm, gx, gy
+
+    def _splat(self, ix, iy, z, gx, gy, rad, idx, colors, nrm) -> None:
+        """The reference's splats, smallest disks first, drawn and painted by one Numba
+        kernel (:func:`~._splat.splat`) in bands of rows: the points ``idx`` of those
+        given, with their ``colors`` (one or one each, 0-255)."""
         import numba
 
         from interaction_tensor.outputs._splat import splat
 
-        rad = rad.astype(np.uint16)                 # small integers: a radix sort
-        order = np.argsort(rad, kind="stable")
+        order = np.argsort(rad.astype(np.uint16), kind="stable")   # a radix sort
         sizes = np.flatnonzero(np.bincount(rad))
         disks = [_disk(r) for r in sizes]
         counts = np.zeros(int(sizes.max()) + 1, np.int64)
@@ -244,24 +289,20 @@ class Canvas:
         dx = np.concatenate([d[0] for d in disks]).astype(np.int64)
         dy = np.concatenate([d[1] for d in disks]).astype(np.int64)
         # the box of pixels the disks reach: only it is searched for winners and reset
-        x0, x1 = max(int((ix - rad).min()), 0), min(int((ix + rad).max()) + 1, self.w)
-        y0, y1 = max(int((iy - rad).min()), 0), min(int((iy + rad).max()) + 1, self.h)
+        r = int(sizes.max())
+        x0, x1 = max(int(ix.min()) - r, 0), min(int(ix.max()) + r + 1, self.w)
+        y0, y1 = max(int(iy.min()) - r, 0), min(int(iy.max()) + r + 1, self.h)
         if x0 >= x1 or y0 >= y1:
             return
         if self._winner is None:
             self._winner = np.full(self.w * self.h, -1, np.int64)
         empty = np.zeros(0, np.float32)
         bands = min(self.h, numba.get_num_threads()) if len(ix) > 50_000 else 1
-        splat(ix[order], iy[order], z[order].astype(np.float32),
-              empty if gx is None else gx[order], empty if gy is None else gy[order],
-              rad[order].astype(np.int64), dx, dy, first, self.w, self.h, bands, self.depth,
-              self._winner)
-        box = self._winner.reshape(self.h, self.w)[y0:y1, x0:x1]
-        local = np.flatnonzero(box >= 0)
-        rows, cols_in = np.divmod(local, x1 - x0)
-        won = box[rows, cols_in]
-        box[rows, cols_in] = -1
-        self._paint((rows + y0) * self.w + cols_in + x0, order[won], cols, nrm)
+        splat(ix, iy, z, empty if gx is None else gx, empty if gy is None else gy, rad,
+              order, dx, dy, first, self.w, self.h, bands, self.depth, self._winner,
+              np.array([x0, x1, y0, y1], np.int64), idx,
+              np.asarray(colors, np.float32).reshape(-1, 3),
+              np.zeros((0, 3)) if nrm is None else nrm, self.albedo, self.normal, self.lit)
 
     def _paint(self, flat, src, cols, nrm) -> None:
         """Give pixels ``flat`` the colour (and normal, lit) of the splatted points ``src``
@@ -311,29 +352,32 @@ class Canvas:
     def image(self, background=BACKGROUND, edl_strength: float = 6.0,
               edl_threshold: float = 0.05) -> np.ndarray:
         """Shade and down-sample: (H, W, 3) uint8 at output resolution."""
-        h, w = self.h, self.w
+        h, w, s = self.h, self.w, self.ss
+        f32 = np.float32
         depth = self.depth.reshape(h, w)
         fg = np.isfinite(depth)
         # Lambert: a headlight plus a key light from above, on two-sided normals
         nrm = self.normal.reshape(h, w, 3)
-        head = -self.cam.forward
-        key = _unit(np.array([0.3, 0.5, 1.0]))
-        lam = 0.38 + 0.42 * np.clip(nrm @ head, 0, 1) + 0.28 * np.clip(nrm @ key, 0, 1)
-        shade = np.where(self.lit.reshape(h, w), np.clip(lam, 0, 1.0), 1.0)
-        # eye-dome lighting: darken pixels that lie behind their neighbours (outlines)
-        logd = np.where(fg, np.log(np.where(fg, depth, 1.0)), np.inf)
-        acc = np.zeros((h, w), np.float32)
-        s = self.ss
-        with np.errstate(invalid="ignore"):
-            for dy, dx in ((s, 0), (-s, 0), (0, s), (0, -s)):
-                nb = np.roll(np.roll(logd, dy, axis=0), dx, axis=1)
-                diff = np.where(fg & np.isfinite(nb), logd - nb, 0.0)
-                # small steps between overlapping splats of one surface are not edges
-                acc += np.clip(diff - edl_threshold, 0, None)
-        shade = shade * np.exp(-edl_strength * 10 * acc)
+        head = (-self.cam.forward).astype(f32)
+        key = _unit(np.array([0.3, 0.5, 1.0])).astype(f32)
+        lam = f32(0.38) + f32(0.42) * np.clip(nrm @ head, 0, 1) \
+            + f32(0.28) * np.clip(nrm @ key, 0, 1)
+        shade = np.where(self.lit.reshape(h, w), np.clip(lam, 0, 1), f32(1))
+        # eye-dome lighting: darken pixels that lie behind their neighbours (outlines);
+        # the background and what lies past the picture's edges are far behind, so a step
+        # down to them is no edge
+        far = f32(1e30)
+        logd = np.full((h + 2 * s, w + 2 * s), far, f32)
+        inner = logd[s:s + h, s:s + w]
+        np.log(depth, out=inner, where=fg)
+        acc = np.zeros((h, w), f32)
+        for dy, dx in ((s, 0), (-s, 0), (0, s), (0, -s)):
+            nb = logd[s - dy:s - dy + h, s - dx:s - dx + w]    # the neighbour dy, dx back
+            # small steps between overlapping splats of one surface are not edges
+            acc += np.clip(inner - nb - f32(edl_threshold), 0, None)
+        shade *= np.exp(f32(-edl_strength * 10) * acc)
         rgb = self.albedo.reshape(h, w, 3) * shade[..., None]
-        bg = np.asarray(background, np.float32) / 255.0
-        rgb = np.where(fg[..., None], rgb, bg)
+        rgb[~fg] = np.asarray(background, f32) / 255
         ow, oh = self.out_size
         rgb = rgb[:oh * s, :ow * s].reshape(oh, s, ow, s, 3).mean(axis=(1, 3))
         return (np.clip(rgb, 0, 1) * 255 + 0.5).astype(np.uint8)

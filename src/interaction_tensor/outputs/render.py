@@ -304,13 +304,13 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
         # PCA normals of the drawn points only (the costly step on large scenes)
         normals = np.zeros_like(pts)
         normals[low] = estimate_normals(pts[low], k=10)
+    # the points drawn, their colours and normals, taken out once for every panel
+    shown, shown_colors, shown_normals = pts[low], colors[low], normals[low]
     rng = np.random.default_rng(0)
-    frame_idx = np.flatnonzero(low)
-    frame_idx = rng.choice(frame_idx, min(len(frame_idx), 4000), replace=False)
-    frame = pts[frame_idx]
+    frame = shown[rng.choice(len(shown), min(len(shown), 4000), replace=False)]
     # coarse copy of the scene for the visibility tests
-    coarse = pts[low][rng.choice(int(low.sum()), min(int(low.sum()), 60_000), replace=False)]
-    coarse_size = 1.7 * spacing * np.sqrt(low.sum() / max(len(coarse), 1))
+    coarse = shown[rng.choice(len(shown), min(len(shown), 60_000), replace=False)]
+    coarse_size = 1.7 * spacing * np.sqrt(len(shown) / max(len(coarse), 1))
 
     views = []  # (camera, caption, ranks shown)
     azimuths = (-60, -120, -30, -150, 30, 60, 120, 150)
@@ -325,7 +325,7 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
                    if obj_samples[j][0] - 1 in group]
         box = np.vstack(members + [positions[group]]) if members else positions[group]
         lo, hi = box.min(axis=0) - diag, box.max(axis=0) + diag
-        nearby = pts[low & np.all((pts >= lo - [0, 0, 10]) & (pts <= hi), axis=1)]
+        nearby = shown[np.all((shown >= lo - [0, 0, 10]) & (shown <= hi), axis=1)]
         fr = np.vstack([box, lo, hi])
         cam = _best_view(nearby if len(nearby) else coarse, size, fr, positions[group],
                          azimuths, 35, 0.5 * diag + 0.05, max(0.03, diag / 4))
@@ -336,7 +336,7 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
     panels, captions, labels = [], [], []
     for cam, caption, ranks in views:
         canvas = Canvas(cam, supersample)
-        canvas.points(pts[low], colors[low], normals[low], size=size)
+        canvas.points(shown, shown_colors, shown_normals, size=size)
         canvas.lines(box_a, box_b, PLACE_COLOR, width_px=supersample)
         for rank, p, n, verts in obj_samples:
             canvas.points(p, OBJECT_COLOR, n, size=1.7 * diag / 150)
