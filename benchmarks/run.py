@@ -478,18 +478,23 @@ def _ratio(old, new) -> str:
 
 def markdown(res: dict) -> str:
     base = res.get("baseline", {})
-    rev = res.get("baseline_rev")
+    revs = {case: res.get("baseline_revs", {}).get(case, res.get("baseline_rev"))
+            for case in base}
+    used = sorted(set(revs.values()))
     lines = ["# Benchmark results", "",
              f"Written by `python benchmarks/run.py`{' --protocol' if 'protocol' in res else ''}"
-             f"{f' --baseline {rev}' if base else ''} on {res['machine']}, the machine "
+             f"{''.join(f' --baseline {r}' for r in used[:1]) if len(used) == 1 else ''} on "
+             f"{res['machine']}, the machine "
              "otherwise idle. Ratios compare two measurements made in the same run. Rates "
              "count candidates (test points past the normal filter, every orientation decided "
              "by the placement tests and the score) over the seconds of both.", ""]
     if base:
-        lines += [f"`{rev}` (the baseline) is the library of git revision {rev}, measured "
-                  "in the same run on the same machine, one case after the other; *same "
-                  "decisions* says whether both accepted the same pairs and predicted the "
-                  "same top k.", ""]
+        named = ", ".join(f"`{r}` ({', '.join(c for c in base if revs[c] == r)})"
+                          for r in used)
+        lines += [f"The baseline{'s' if len(used) > 1 else ''}, {named}: the library of that "
+                  "git revision, measured in the same run as the case on the same machine, "
+                  "one case after the other; *same decisions* says whether both accepted the "
+                  "same pairs and predicted the same top k.", ""]
     if len(set(res.get("runs", {}).values())) > 1:
         groups: dict = {}
         for case, r in res["runs"].items():
@@ -498,6 +503,7 @@ def markdown(res: dict) -> str:
             ", ".join(v) for _, v in sorted(groups.items())) + ".", ""]
     if "detect" in res:
         b = base.get("detect", {})
+        rev = revs.get("detect")
         lines += ["## Detection at the defaults (30 % test points)", "",
                   "| case | scene points | candidates | seconds | placement tests / scoring / "
                   "collision s | candidates/s | exact reference on 1,000 candidates: same "
@@ -543,7 +549,7 @@ def markdown(res: dict) -> str:
                   + ("; the same decisions as each alone" if m.get("one_pass_as_alone")
                      else "") + "."]
         if "many" in base:
-            o = base["many"]
+            o, rev = base["many"], revs["many"]
             lines.append(f"`{rev}`: one pass {o['one_pass_s']} s "
                          f"({_ratio(o['one_pass_s'], m['one_pass_s'])}), the slowest alone "
                          f"{o['slowest_alone_s']} s; same decisions: "
@@ -551,7 +557,7 @@ def markdown(res: dict) -> str:
         lines.append("")
     if "prepare" in res:
         p = res["prepare"]
-        o = base.get("prepare")
+        o, rev = base.get("prepare"), revs.get("prepare")
 
         def vs(key, field):
             return (f" (`{rev}` {o[key][field]}, {_ratio(o[key][field], p[key][field])})"
@@ -596,7 +602,7 @@ def markdown(res: dict) -> str:
         lines.append("")
     if "protocol" in res:
         p = res["protocol"]
-        o = base.get("protocol")
+        o, rev = base.get("protocol"), revs.get("protocol")
         lines += ["## The paper's protocol, detection only", "",
                   f"The 8 examples on the 14 published scenes at 30 %: {p['total_min']} min"
                   + (f" (`{rev}`: {o['total_min']} min, {_ratio(o['total_min'], p['total_min'])})"
@@ -626,8 +632,10 @@ def main() -> None:
     library = None
     if args.baseline:
         library = baseline_tree(args.baseline)
-        res["baseline_rev"] = library.parent.name
         res.setdefault("baseline", {})
+        # the revision each case's baseline figures are of (earlier runs' may differ)
+        res.setdefault("baseline_revs", {c: res.get("baseline_rev") for c in res["baseline"]})
+        res["baseline_rev"] = library.parent.name
 
     def measure(name, lib=None):
         if name == "detect":
@@ -649,8 +657,10 @@ def main() -> None:
         res[name] = measure(name)
         if library is not None and name in BASELINE_CASES:
             res["baseline"][name] = measure(name, library)
+            res["baseline_revs"][name] = library.parent.name
         elif "baseline" in res:
             res["baseline"].pop(name, None)
+            res.get("baseline_revs", {}).pop(name, None)
         print(f"{name}: {time.perf_counter() - t:.0f} s", flush=True)
     (HERE / "results.json").write_text(json.dumps(res, indent=1) + "\n")
     (HERE / "RESULTS.md").write_text(markdown(res))

@@ -260,3 +260,18 @@ def test_the_splat_kernel_fills_the_z_buffer_as_the_numpy_reference():
     for name in ("depth", "albedo", "normal", "lit"):
         np.testing.assert_array_equal(getattr(ref, name), getattr(fast, name), err_msg=name)
     np.testing.assert_array_equal(np.asarray(ref.image()), np.asarray(fast.image()))
+
+
+def test_splats_refuse_colours_or_normals_that_do_not_match_the_points():
+    """The kernels read colours and normals by point index, so a mismatch is refused
+    before any is read."""
+    from interaction_tensor.outputs.raster import Canvas, frame_points
+
+    pts = np.random.default_rng(0).random((500, 3))
+    canvas = Canvas(frame_points(pts, -60, 35, 80, 60))
+    with pytest.raises(ValueError, match="499 colours for 500 points"):
+        canvas.points(pts, np.zeros((499, 3), np.uint8))
+    with pytest.raises(ValueError, match="normals of shape"):
+        canvas.points(pts, (255, 0, 0), np.zeros((20, 3)))
+    canvas.points(pts, (255, 0, 0), np.tile([0.0, 0.0, 1.0], (500, 1)))
+    assert np.isfinite(canvas.depth).any()

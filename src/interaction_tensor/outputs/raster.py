@@ -166,14 +166,20 @@ class Canvas:
         ``size``: the sample spacing in metres (the splat covers about that much surface);
         or ``radius_px``: a fixed radius in output pixels. ``normals`` (N, 3) are flipped to
         face the camera (two-sided lighting); without normals, or with ``lit=False``, the
-        colour is drawn as is. The z-buffer is filled by a Numba kernel (:mod:`._splat`);
-        ``reference``: by the NumPy reference instead (the same picture, slower).
+        colour is drawn as is. The points are projected and the z-buffer filled by Numba
+        kernels (:mod:`._splat`); ``reference``: by the NumPy reference instead (the same
+        picture, slower).
         """
         pts = np.ascontiguousarray(points, float)
         if len(pts) == 0:
             return
+        colors = np.asarray(colors, np.float32).reshape(-1, 3)
+        if len(colors) not in (1, len(pts)):
+            raise ValueError(f"{len(colors)} colours for {len(pts)} points")
         normals = np.ascontiguousarray(normals, float) if normals is not None and lit \
             else None
+        if normals is not None and normals.shape != pts.shape:
+            raise ValueError(f"normals of shape {normals.shape} for {len(pts)} points")
         half_size = 0.5 * (0.01 if size is None else size)
         fixed = -1 if radius_px is None else int(radius_px) * self.ss
         prepared = (self._prepare_reference if reference else self._prepare)(
@@ -184,7 +190,7 @@ class Canvas:
         if not reference:
             self._splat(ix, iy, z, gx, gy, rad, idx, colors, nrm)
             return
-        cols = np.broadcast_to(np.asarray(colors, np.float32) / 255.0, (len(pts), 3))[idx]
+        cols = np.broadcast_to(colors / 255.0, (len(pts), 3))[idx]
         for r in np.unique(rad):
             sel = np.flatnonzero(rad == r)
             dx, dy = _disk(r)
@@ -275,7 +281,7 @@ class Canvas:
     def _splat(self, ix, iy, z, gx, gy, rad, idx, colors, nrm) -> None:
         """The reference's splats, smallest disks first, drawn and painted by one Numba
         kernel (:func:`~._splat.splat`) in bands of rows: the points ``idx`` of those
-        given, with their ``colors`` (one or one each, 0-255)."""
+        given, with their ``colors`` ((1, 3) for all or (N, 3), float32, 0-255)."""
         import numba
 
         from interaction_tensor.outputs._splat import splat
@@ -300,8 +306,7 @@ class Canvas:
         bands = min(self.h, numba.get_num_threads()) if len(ix) > 50_000 else 1
         splat(ix, iy, z, empty if gx is None else gx, empty if gy is None else gy, rad,
               order, dx, dy, first, self.w, self.h, bands, self.depth, self._winner,
-              np.array([x0, x1, y0, y1], np.int64), idx,
-              np.asarray(colors, np.float32).reshape(-1, 3),
+              np.array([x0, x1, y0, y1], np.int64), idx, colors,
               np.zeros((0, 3)) if nrm is None else nrm, self.albedo, self.normal, self.lit)
 
     def _paint(self, flat, src, cols, nrm) -> None:
