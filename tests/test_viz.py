@@ -275,3 +275,30 @@ def test_splats_refuse_colours_or_normals_that_do_not_match_the_points():
         canvas.points(pts, (255, 0, 0), np.zeros((20, 3)))
     canvas.points(pts, (255, 0, 0), np.tile([0.0, 0.0, 1.0], (500, 1)))
     assert np.isfinite(canvas.depth).any()
+
+
+def test_a_close_up_looks_in_under_a_shelf():
+    """A prediction under a shelf (a board 9 cm above it) is out of sight from the
+    close-ups' usual elevation; the view is then taken from lower down, where the camera
+    sees it past the board's edge (frame and cut of a 15 cm object, as the picture's)."""
+    from interaction_tensor.outputs.render import _best_view
+
+    g = np.linspace(-1.5, 1.5, 301)
+    floor = np.column_stack([a.ravel() for a in np.meshgrid(g, g)] + [np.zeros(g.size ** 2)])
+    b = np.linspace(-0.5, 0.5, 101)
+    board = np.column_stack([a.ravel() for a in np.meshgrid(b, b)] + [np.full(b.size ** 2, 0.12)])
+    scene = np.vstack([floor, board])
+    target = np.array([[0.0, 0.0, 0.03]])
+    frame = np.vstack([target - 0.15, target + 0.15])
+    az = (-60, -120, -30, -150, 30, 60, 120, 150)
+    for elevations, expected in (((35,), 35), ((35, 12), 12)):
+        cam = _best_view(scene, 0.02, frame, target, az, elevations, 0.125, 0.03)
+        d = cam.eye - cam.target
+        assert np.degrees(np.arctan2(d[2], np.hypot(d[0], d[1]))) == pytest.approx(expected,
+                                                                                   abs=0.5)
+    # from above, the board hides it
+    from interaction_tensor.outputs.raster import Canvas, frame_points
+
+    canvas = Canvas(frame_points(frame, -60, 35, 160, 120, near_cut=0.125), supersample=1)
+    canvas.points(scene, (0, 0, 0), size=0.02, lit=False)
+    assert not canvas.visible(target, 0.03).any()

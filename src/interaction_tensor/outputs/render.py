@@ -240,18 +240,28 @@ def _clusters(positions: np.ndarray, radius: float, limit: int) -> list[list[int
     return groups[:limit]
 
 
-def _best_view(scene_pts, scene_size, frame, targets, azimuths, elevation, near_cut, tol):
-    """The azimuth among ``azimuths`` from which most ``targets`` are visible (low-res depth
-    test of the scene), ties to the first; returns the Camera framed at panel size."""
-    best, best_cam = -1, None
-    for az in azimuths:
-        cam = frame_points(frame, az, elevation, 160, 120, near_cut=near_cut)
-        canvas = Canvas(cam, supersample=1)
-        canvas.points(scene_pts, (0, 0, 0), size=scene_size, lit=False)
-        seen = int(canvas.visible(targets, tol).sum())
-        if seen > best:
-            best, best_cam = seen, az
-    return frame_points(frame, best_cam, elevation, *PANEL, near_cut=near_cut)
+def _best_view(scene_pts, scene_size, frame, targets, azimuths, elevations, near_cut, tol):
+    """The view among ``elevations`` x ``azimuths`` from which most ``targets`` are visible
+    (low-res depth test of the scene), ties to the first (elevations before azimuths);
+    returns the Camera framed at panel size."""
+    best, best_view = -1, None
+    for el in elevations:
+        for az in azimuths:
+            cam = frame_points(frame, az, el, 160, 120, near_cut=near_cut)
+            canvas = Canvas(cam, supersample=1)
+            canvas.points(scene_pts, (0, 0, 0), size=scene_size, lit=False)
+            seen = int(canvas.visible(targets, tol).sum())
+            if seen > best:
+                best, best_view = seen, (az, el)
+            if best == len(targets):
+                break
+        if best == len(targets):
+            break
+    return frame_points(frame, *best_view, *PANEL, near_cut=near_cut)
+
+
+#: A posed object counts as in sight in a panel when this share of its samples is.
+IN_SIGHT = 0.01
 
 
 # --------------------------------------------------------------------------- render.png
@@ -263,10 +273,12 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
     Panels: an overview of the whole scene from above (points higher than the predictions'
     surroundings are hidden so ceilings and wall cabinets do not cover them), then up to
     ``max_closeups`` close-ups, one per group of nearby predictions, each from the azimuth
-    that sees most of them, cutting away what stands between the camera and the group. The
+    (and, where the usual elevation does not see them all, a lower one: under a shelf) that
+    sees most of them, cutting away what stands between the camera and the group. The
     scene is coloured by the heat map (grey: not accepted) with a colour bar; the query
     object is drawn at each of the ``top_k`` predictions and labelled with its rank, and
-    the place it stands for is outlined (the box round the place's accepted test points).
+    the place it stands for is outlined (the box round the place's accepted test points);
+    one out of sight in a panel is named in its caption instead.
     ``normals``: the heat map's points' normals (the scene's, in ``heatmap.ply``'s order),
     which shade them, and ``spacing`` (m), theirs: estimated from the points when not given
     (:meth:`Detection.save` gives the scene's).
@@ -315,7 +327,7 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
     views = []  # (camera, caption, ranks shown)
     azimuths = (-60, -120, -30, -150, 30, 60, 120, 150)
     if len(positions):
-        cam = _best_view(coarse, coarse_size, frame, positions, azimuths, 50, None, 0.1)
+        cam = _best_view(coarse, coarse_size, frame, positions, azimuths, (50,), None, 0.1)
     else:
         cam = frame_points(frame, -60, 50, *PANEL)
     views.append((cam, f"overview{cut_note}", list(range(1, len(positions) + 1))))
@@ -328,7 +340,7 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
         nearby = shown[np.all((shown >= lo - [0, 0, 10]) & (shown <= hi), axis=1)]
         fr = np.vstack([box, lo, hi])
         cam = _best_view(nearby if len(nearby) else coarse, size, fr, positions[group],
-                         azimuths, 35, 0.5 * diag + 0.05, max(0.03, diag / 4))
+                         azimuths, (35, 12), 0.5 * diag + 0.05, max(0.03, diag / 4))
         ranks = [i + 1 for i in group]
         views.append((cam, "close-up: " + ", ".join(f"#{r}" for r in ranks), ranks))
 
@@ -341,15 +353,21 @@ def render_outdir(outdir, out_png=None, top_k: int | None = None, max_closeups: 
         for rank, p, n, verts in obj_samples:
             canvas.points(p, OBJECT_COLOR, n, size=1.7 * diag / 150)
         panels.append(canvas.image())
-        captions.append(caption)
-        lab = []
+        lab, unseen = [], []
         for rank, p, n, verts in obj_samples:
-            if rank in ranks:
-                topp = verts.mean(axis=0)
-                topp[2] = verts[:, 2].max() + 0.01
-                x, y, z = canvas.project(topp[None])
-                if z[0] > cam.near:
-                    lab.append((f"#{rank}", (float(x[0]), float(y[0]) - 4)))
+            if rank not in ranks:
+                continue
+            # a label marks an object in sight; one hidden (under a shelf, behind a
+            # cabinet) is named in the caption instead of labelled over what hides it
+            if canvas.visible(p, max(0.005, diag / 30)).mean() < IN_SIGHT:
+                unseen.append(f"#{rank}")
+                continue
+            topp = verts.mean(axis=0)
+            topp[2] = verts[:, 2].max() + 0.01
+            x, y, z = canvas.project(topp[None])
+            if z[0] > cam.near:
+                lab.append((f"#{rank}", (float(x[0]), float(y[0]) - 4)))
+        captions.append(caption + (f"; {', '.join(unseen)} out of sight" if unseen else ""))
         labels.append(lab)
     bar = _colorbar(PANEL[1], od.threshold, 1.0, "score", "not accepted")
     img = _compose(panels, captions, od.title, bar, labels)
