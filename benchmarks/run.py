@@ -4,6 +4,7 @@
     python benchmarks/run.py --only detect many  # some of them
     python benchmarks/run.py --protocol          # also the paper's protocol (14 scenes x 8)
     python benchmarks/run.py --baseline REV      # and the same cases on git revision REV
+    python benchmarks/run.py --only detect --repeat 3   # each detection case's median of 3
 
 Writes every figure to ``benchmarks/results.json`` and the summary drawn from it,
 ``benchmarks/RESULTS.md``, overwriting both: each figure with its command, the machine and,
@@ -17,7 +18,9 @@ With ``--baseline REV`` the ``detect``, ``many``, ``prepare`` and ``protocol`` c
 second time on the library of git revision REV (its ``src/`` exported into
 ``results/benchmarks/baseline/``, its kernels compiled there first), one after the other on
 the same machine: each figure then has its ratio to REV's, and whether the two made the same
-decisions (the same accepted pairs and the same top k).
+decisions (the same accepted pairs and the same top k). With ``--repeat N`` the ``detect``
+cases run N times (alternating with the baseline's, so that a slow spell of the machine
+falls on both): each case reports its run of median seconds, with the range of the N.
 
 Cases:
 
@@ -472,6 +475,28 @@ def machine() -> str:
             f"({numba.config.NUMBA_NUM_THREADS} threads)")
 
 
+def median_run(runs: list) -> dict:
+    """Of repeated ``detect`` results (label -> figures), each label's run of median seconds
+    (the lower of the two middle ones for an even count), with every run's seconds in
+    ``seconds_runs``."""
+    if len(runs) == 1:
+        return runs[0]
+    out = {}
+    for label in runs[0]:
+        ranked = sorted((r[label] for r in runs), key=lambda f: f["seconds"])
+        out[label] = dict(ranked[(len(ranked) - 1) // 2],
+                          seconds_runs=[f["seconds"] for f in ranked])
+    return out
+
+
+def _seconds(figures: dict) -> str:
+    """A case's seconds, with the range where it is the median of repeated runs."""
+    runs = figures.get("seconds_runs")
+    if not runs:
+        return f"{figures['seconds']}"
+    return f"{figures['seconds']} (median of {len(runs)}: {runs[0]}-{runs[-1]})"
+
+
 def _ratio(old, new) -> str:
     return f"{old / new:.1f}x" if new else "n/a"
 
@@ -513,7 +538,7 @@ def markdown(res: dict) -> str:
                   "|---|---:|---:|---:|---:|---:|---|" + ("---:|---:|---|" if b else "")]
         for label, r in res["detect"].items():
             ref = r["reference"]
-            row = (f"| {label} | {r['scene_points']:,} | {r['candidates']:,} | {r['seconds']} | "
+            row = (f"| {label} | {r['scene_points']:,} | {r['candidates']:,} | {_seconds(r)} | "
                    f"{r['placement_tests_s']:.1f} / {r['scoring_s']:.1f} / "
                    f"{r.get('collision_s', 0):.1f} | {r['candidates_per_s']:,.0f} | "
                    f"{'yes' if ref['identical_decisions'] else 'NO'}, "
@@ -521,7 +546,7 @@ def markdown(res: dict) -> str:
                    f"{ref['reference_candidates_per_s']:,.0f}, {ref['ratio']}x |")
             if label in b:
                 o = b[label]
-                row += (f" {o['seconds']} ({o['placement_tests_s']:.1f} / {o['scoring_s']:.1f}"
+                row += (f" {_seconds(o)} ({o['placement_tests_s']:.1f} / {o['scoring_s']:.1f}"
                         f" / {o.get('collision_s', 0):.1f}) | {_ratio(o['seconds'], r['seconds'])}"
                         f" | {'yes' if o.get('decisions') == r.get('decisions') else 'NO'} |")
             lines.append(row)
@@ -615,6 +640,9 @@ def main() -> None:
     ap.add_argument("--one", nargs=2, help=argparse.SUPPRESS)
     ap.add_argument("--only", nargs="+", choices=CASES, default=list(CASES))
     ap.add_argument("--protocol", action="store_true", help="also the paper's protocol")
+    ap.add_argument("--repeat", type=int, default=1, metavar="N",
+                    help="run the detect cases N times (alternating with the baseline's) and "
+                         "report each case's median")
     ap.add_argument("--baseline", metavar="REV",
                     help="also run the detect, many, prepare and protocol cases on git "
                          "revision REV's library, for their ratios")
@@ -654,9 +682,15 @@ def main() -> None:
     for name in names:
         res["runs"][name] = run_id
         t = time.perf_counter()
-        res[name] = measure(name)
-        if library is not None and name in BASELINE_CASES:
-            res["baseline"][name] = measure(name, library)
+        runs, base_runs = [], []
+        with_base = library is not None and name in BASELINE_CASES
+        for _ in range(max(1, args.repeat) if name == "detect" else 1):
+            runs.append(measure(name))
+            if with_base:
+                base_runs.append(measure(name, library))
+        res[name] = median_run(runs)
+        if with_base:
+            res["baseline"][name] = median_run(base_runs)
             res["baseline_revs"][name] = library.parent.name
         elif "baseline" in res:
             res["baseline"].pop(name, None)
