@@ -1,6 +1,7 @@
 """Draw poses of an example in a published scene: one row of four close-ups (front, side,
 oblique, above) per pose, green where the judge finds it valid and red where not (its
-reasons printed), to look at before trusting a verdict.
+reasons printed), to look at before trusting a verdict; with ``--neutral``, every pose in
+the blind panel's one colour and no verdict, a sheet to show raters.
 
     python paper/scripts/draw_poses.py --objects ../shared/data/objects --scene kitchen1 \\
         --example filling-mug --family standing -o out.png 7.098,10.115,0.884,0 ...
@@ -25,6 +26,7 @@ from interaction_tensor.geometry.load import load_geometry
 from itensor_paper import pictures as P
 from itensor_paper.judge import Judge, JudgeScene
 from itensor_paper.oracle import standing_pose
+from itensor_paper.panel import NEUTRAL
 
 
 def main(argv=None) -> int:
@@ -33,6 +35,8 @@ def main(argv=None) -> int:
     ap.add_argument("--scene", required=True, help="a published scene's name")
     ap.add_argument("--example", required=True)
     ap.add_argument("--family", choices=("detection", "standing"), default="detection")
+    ap.add_argument("--neutral", action="store_true",
+                    help="the panel's one colour and no verdict: a sheet for raters")
     ap.add_argument("-o", "--output", required=True)
     ap.add_argument("poses", nargs="+", help="x,y,z,k or a 4x4 pose (16 numbers)")
     args = ap.parse_args(argv)
@@ -60,9 +64,12 @@ def main(argv=None) -> int:
                     else tensor.pose(np.array([x, y, z]), 2 * np.pi * k / 8))
         else:
             ap.error(f"{text!r}: expected x,y,z,k or 16 numbers")
-        v = judge.judge(js, pose)
-        print(f"{text}: {'valid' if v.valid else 'invalid: ' + '; '.join(v.reasons)}")
-        colour = P.VALID if v.valid else P.INVALID
+        if args.neutral:
+            colour = NEUTRAL
+        else:
+            v = judge.judge(js, pose)
+            print(f"{text}: {'valid' if v.valid else 'invalid: ' + '; '.join(v.reasons)}")
+            colour = P.VALID if v.valid else P.INVALID
         rows.append(np.hstack([P.closeup(sp, sn, qp, qn, pose, colour, spacing=0.01,
                                          azimuths=(az,), elevation=el, size=(420, 340),
                                          margin=0.35)
