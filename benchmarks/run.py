@@ -508,7 +508,7 @@ def markdown(res: dict) -> str:
     used = sorted(set(revs.values()))
     lines = ["# Benchmark results", "",
              f"Written by `python benchmarks/run.py`{' --protocol' if 'protocol' in res else ''}"
-             f"{''.join(f' --baseline {r}' for r in used[:1]) if len(used) == 1 else ''} on "
+             f"{f' --baseline {used[0]}' if len(used) == 1 else ''} on "
              f"{res['machine']}, the machine "
              "otherwise idle. Ratios compare two measurements made in the same run. Rates "
              "count candidates (test points past the normal filter, every orientation decided "

@@ -65,14 +65,17 @@ class Camera:
         return px, py, z
 
     def _project(self, points: np.ndarray):
-        """:meth:`project`, and the (N, 3) points in the camera's frame (right, up,
-        forward), from one product with its axes."""
-        cam = (np.asarray(points, float) - self.eye) @ self.axes.T
-        z = cam[:, 2]
-        zs = np.where(np.abs(z) > 1e-9, z, 1e-9)
-        px = 0.5 * self.width + self.focal * cam[:, 0] / zs
-        py = 0.5 * self.height - self.focal * cam[:, 1] / zs
-        return px, py, z, cam
+        """:meth:`project`, and the points' coordinates in the camera's frame (right, up,
+        forward: three (N,) arrays), in the arithmetic of the splat's Numba kernel
+        (:func:`~._splat.prepare`), so that both give the same bits."""
+        d = np.asarray(points, float) - self.eye
+        ax = self.axes
+        c0, c1, c2 = (d[:, 0] * ax[k, 0] + d[:, 1] * ax[k, 1] + d[:, 2] * ax[k, 2]
+                      for k in range(3))
+        zs = np.where(np.abs(c2) > 1e-9, c2, 1e-9)
+        px = 0.5 * self.width + self.focal * c0 / zs
+        py = 0.5 * self.height - self.focal * c1 / zs
+        return px, py, c2, (c0, c1, c2)
 
     @property
     def axes(self) -> np.ndarray:
@@ -219,12 +222,7 @@ class Canvas:
         disk: (idx, ix, iy, z, radius, normals or None, gx or None, gy or None), or None
         where no point is in reach. NumPy, in the arithmetic of :func:`~._splat.prepare`."""
         cam, ax = self.cam, self.cam.axes
-        d = pts - cam.eye
-        c0, c1, c2 = (d[:, 0] * ax[k, 0] + d[:, 1] * ax[k, 1] + d[:, 2] * ax[k, 2]
-                      for k in range(3))
-        zs = np.where(np.abs(c2) > 1e-9, c2, 1e-9)
-        px = 0.5 * self.w + cam.focal * c0 / zs
-        py = 0.5 * self.h - cam.focal * c1 / zs
+        px, py, c2, (c0, c1, _) = cam._project(pts)
         keep = (c2 > cam.near) & (px > -50) & (px < self.w + 50) & (py > -50) & \
             (py < self.h + 50) & np.isfinite(px) & np.isfinite(py)
         if not keep.any():
@@ -274,9 +272,7 @@ class Canvas:
         prepare(pts, normals if shaded else np.zeros((0, 3)), idx, eye, axes,
                 float(cam.focal), self.w, self.h, float(half_size), int(fixed),
                 self.MAX_SPLAT_RADIUS, ix, iy, z, rad, nrm, gx, gy)
-        if not shaded:
-            return idx, ix, iy, z, rad, None, None, None
-        return idx, ix, iy, z, rad, nrm, gx, gy
+        return (idx, ix, iy, z, rad) + ((nrm, gx, gy) if shaded else (None, None, None))
 
     def _splat(self, ix, iy, z, gx, gy, rad, idx, colors, nrm) -> None:
         """The reference's splats, smallest disks first, drawn and painted by one Numba

@@ -36,6 +36,8 @@ _CORNERS = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)],
 _BOX_EDGES = np.array([(i, j) for i in range(8) for j in range(i + 1, 8)
                        if (_CORNERS[i] != _CORNERS[j]).sum() == 1])
 PANEL = (640, 480)
+#: A posed object counts as in sight in a panel when this share of its samples is.
+IN_SIGHT = 0.01
 
 
 # --------------------------------------------------------------------------- reading
@@ -245,23 +247,16 @@ def _best_view(scene_pts, scene_size, frame, targets, azimuths, elevations, near
     (low-res depth test of the scene), ties to the first (elevations before azimuths);
     returns the Camera framed at panel size."""
     best, best_view = -1, None
-    for el in elevations:
-        for az in azimuths:
-            cam = frame_points(frame, az, el, 160, 120, near_cut=near_cut)
-            canvas = Canvas(cam, supersample=1)
-            canvas.points(scene_pts, (0, 0, 0), size=scene_size, lit=False)
-            seen = int(canvas.visible(targets, tol).sum())
-            if seen > best:
-                best, best_view = seen, (az, el)
-            if best == len(targets):
-                break
-        if best == len(targets):
+    for el, az in ((el, az) for el in elevations for az in azimuths):
+        cam = frame_points(frame, az, el, 160, 120, near_cut=near_cut)
+        canvas = Canvas(cam, supersample=1)
+        canvas.points(scene_pts, (0, 0, 0), size=scene_size, lit=False)
+        seen = int(canvas.visible(targets, tol).sum())
+        if seen > best:
+            best, best_view = seen, (az, el)
+        if best == len(targets):            # every one in sight: no view does better
             break
     return frame_points(frame, *best_view, *PANEL, near_cut=near_cut)
-
-
-#: A posed object counts as in sight in a panel when this share of its samples is.
-IN_SIGHT = 0.01
 
 
 # --------------------------------------------------------------------------- render.png
