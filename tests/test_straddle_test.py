@@ -203,3 +203,41 @@ def test_a_rider_on_a_tall_partition_is_out_of_reach_and_one_on_the_bench_is_not
     off = dict(skip_tests=only["skip_tests"] + ("mount",))
     assert (check_placements(points, orient, riding, it.DetectSettings(**off),
                              room)[1] == PLACED).all()
+
+
+def test_a_riders_feet_reach_a_floor_or_a_rest_at_any_height(riding):
+    """Astride a 0.9 m partition the soles are 0.43 m above the floor, within
+    :data:`.checks.RIDER_REACH`; astride a 1.2 m one (its seat within reach) they dangle
+    0.73 m above it and fail, unless a desk 0.7 m high stands on each side under the feet:
+    a rest at any height, though a seated person's feet may not stand that high."""
+    from interaction_tensor.placement.checks import (
+        FAILS_FEET,
+        RIDER_REACH,
+        feet_gaps,
+        rider_feet,
+    )
+
+    from support import box_part, parts_mesh
+
+    assert riding.feet_reach == RIDER_REACH == 0.65
+    feet = rider_feet(riding)
+    assert len(feet) == 2 and all(len(f) >= 10 for f, _ in feet)
+    sole = feet[0][1] - riding.reference_point[2]
+    assert -0.48 < sole < -0.46                      # the soles 0.47 m under the seat
+    parts = [box_part("low", (0.0, 0.0, 0.45), (2.0, 0.10, 0.9)),
+             box_part("tall", (0.0, 2.0, 0.6), (2.0, 0.10, 1.2)),
+             box_part("tall, desks", (0.0, 4.0, 0.6), (2.0, 0.10, 1.2)),
+             box_part("desk", (0.0, 3.7, 0.35), (2.0, 0.5, 0.7)),
+             box_part("desk", (0.0, 4.3, 0.35), (2.0, 0.5, 0.7)),
+             box_part("floor", (0.0, 2.0, -0.01), (4.0, 6.0, 0.02))]
+    scene = it.prepare_scene(parts_mesh(parts), 0.01, seed=0)
+    points = np.array([[0.0, 0.0, 0.9], [0.0, 2.0, 1.2], [0.0, 4.0, 1.2]])
+    orient = np.zeros(3, np.int64)
+    gaps = feet_gaps(points, orient, riding, scene, 8)
+    np.testing.assert_allclose(gaps, [0.9 + sole, 1.2 + sole, 1.2 + sole - 0.7],
+                               atol=0.012)
+    only = it.DetectSettings(skip_tests=tuple(t for t in STRADDLE_ONLY if t != "feet"))
+    assert check_placements(points, orient, riding, only, scene)[1].tolist() \
+        == [PLACED, FAILS_FEET, PLACED]
+    grid = scene.grid()
+    np.testing.assert_allclose(feet_gaps(points, orient, riding, scene, 8, grid), gaps)

@@ -347,7 +347,8 @@ def main(argv=None) -> int:
                     f"{kept}/{int(valid.sum())} | {rejected}/{int((~valid).sum())} "
                     f"(without it {base_s}) | {'**yes**' if o == best_s else ''} |")
         final[aff] = (valid, seat, okg)
-        if not standing_groups(examples_of[aff]):
+        # a rider's feet reach is the judge's own limit (checks.RIDER_REACH), not chosen here
+        if not standing_groups(examples_of[aff]) or examples_of[aff].mount_height is not None:
             feet_choice[aff] = None
             continue
         base_g = int((~okg[~valid]).sum())

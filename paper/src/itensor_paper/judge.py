@@ -173,7 +173,7 @@ class JudgeSettings:
     arm_lateral: float = collision.ARM_LATERAL
     forearm_above_seat: tuple = collision.FOREARM_ABOVE_SEAT
     forearm_ahead: float = collision.FOREARM_AHEAD
-    feet_height: float = 0.12
+    feet_height: float = checks.FEET_HEIGHT
     contact_tolerance: float = 0.01
     contact_distance: float = 0.02
     contact_fraction: float = 0.5
@@ -220,7 +220,7 @@ class JudgeSettings:
     legroom_along: tuple = (-0.10, 0.20)
     legroom_below: tuple = (0.14, 0.02)        # (below, above) the seat
     seat_above_ground: float = checks.SEAT_REACH
-    rider_feet_reach: float = 0.65
+    rider_feet_reach: float = checks.RIDER_REACH
     max_tilt: float = 15.0                     # degrees
     seed: int = 0
 

@@ -23,7 +23,7 @@ from interaction_tensor.examples.posing import (
     translated,
 )
 from interaction_tensor.geometry.core import Geometry
-from interaction_tensor.placement.checks import SEAT_REACH
+from interaction_tensor.placement.checks import RIDER_REACH, SEAT_REACH
 
 
 def rider_and_bike(rider: Geometry, seed: int):
@@ -82,7 +82,8 @@ AFFORDANCE = Affordance(
     # off; the collision test (the body and each limb freed by its own move of at most 2 cm,
     # the judge's rule), the straddle boxes and the seat contact test (a quarter of the seat
     # region within 5 cm) chosen on the judge's labelled set
-    # (paper/scripts/choose_collision.py); the mount height is the judge's own limit.
+    # (paper/scripts/choose_collision.py); the mount height and the feet's reach are the
+    # judge's own limits.
     acceptance=dict(threshold=0.05, gaussian_threshold=0.22,
                     clearance_limit=0.20, interior_limit=1.0,
                     contact=("seat", 0.05, 0.25, 90.0),
@@ -90,7 +91,7 @@ AFFORDANCE = Affordance(
                     straddle={"astride": ((0.12, 0.32), (-0.03, 0.03), (-0.30, 0.02)),
                               "legroom": [((-0.10, 0.20), (0.16, 0.40), (-0.14, 0.02)),
                                           ((-0.10, 0.20), (-0.40, -0.16), (-0.14, 0.02))]},
-                    mount_height=SEAT_REACH),
+                    mount_height=SEAT_REACH, feet_reach=RIDER_REACH),
     judge=JudgeRule(("upright", "penetration", "contact", "astride", "legroom", "mount"),
                     person=True),
 )

@@ -65,7 +65,7 @@ FAILS_COLLISION = 4
 FAILS_GROUND = 5
 #: A placement whose standing contacts (a seated person's feet) find nothing to stand on
 #: within the descriptor's ``feet_reach`` below them and dangle from a seat out of reach
-#: (:func:`feet_pass`).
+#: (:func:`feet_pass`), or whose rider's feet find no floor or rest within it.
 FAILS_FEET = 6
 #: A placement with nothing going on between the legs ahead of the seat, or with the scene
 #: where a leg goes on either side of it: the descriptor's ``straddle`` boxes
@@ -90,6 +90,13 @@ FEET_ABOVE_GROUND = 0.6
 #: feet in the air); higher, no one climbs up to sit there. The judge's
 #: ``seat_above_ground``, for sitting and riding alike.
 SEAT_REACH = 1.2
+#: How far (m) below a rider's soles a floor or a foot rest (at any height: a desk under a
+#: partition's top) may be: the example rider's bent legs straightened (its soles are 0.37 m
+#: under its seat). A rider straddles a 0.9 m wall on tiptoe, not a 2.4 m partition's top
+#: with the feet a metre above the floor. The judge's ``rider_feet_reach``.
+RIDER_REACH = 0.65
+#: How far (m) above its lowest point a rider's feet reach (the judge's ``feet_height``).
+FEET_HEIGHT = 0.12
 #: How far (m) beyond the query object's size the ground is looked for around a placement
 #: (the judge's ``ground_radius``).
 GROUND_RADIUS = 1.5
@@ -388,7 +395,11 @@ def above_ground(points, tensor, scene) -> np.ndarray:
 def standing_groups(tensor, tolerance: float = 0.02) -> list:
     """The example's standing contacts: each contact group whose points all lay within
     ``tolerance`` (m) of the example's ground (a seated person's feet; none without a
-    ground). Returns a list of ((F, 3) training-frame contact points, sole height m)."""
+    ground); for a mounted example (``mount_height``: a rider, its feet on the pegs above
+    the ground) its feet as the judge finds them, :func:`rider_feet`. Returns a list of
+    ((F, 3) training-frame points, sole height m)."""
+    if tensor.mount_height is not None:
+        return rider_feet(tensor)
     if tensor.ground is None or len(tensor.contact_group_ids) == 0:
         return []
     ids = np.asarray(tensor.contact_group_ids)
@@ -397,8 +408,27 @@ def standing_groups(tensor, tolerance: float = 0.02) -> list:
             if pts[ids == g, 2].max() <= tensor.ground + tolerance]
 
 
+def rider_feet(tensor, cell: float = 0.02) -> list:
+    """A rider's two feet: the query's vertices within :data:`FEET_HEIGHT` of its lowest,
+    on either side of their median across (training-frame y), each thinned to one vertex a
+    ``cell`` (m) square (the feet test searches a 2 cm column and its neighbours under
+    each), with the foot's lowest height as its sole. The judge's feet."""
+    v = np.asarray(tensor.query_vertices, float).reshape(-1, 3)
+    if len(v) == 0:
+        return []
+    low = v[v[:, 2] <= v[:, 2].min() + FEET_HEIGHT]
+    mid = np.median(v[:, 1])
+    feet = []
+    for foot in (low[low[:, 1] > mid], low[low[:, 1] <= mid]):
+        if len(foot):
+            _, keep = np.unique(np.floor(foot[:, :2] / cell).astype(np.int64), axis=0,
+                                return_index=True)
+            feet.append((foot[np.sort(keep)], float(foot[:, 2].min())))
+    return feet
+
+
 def feet_gaps_at(feet: list, scene, ground: np.ndarray, tolerance: float = FEET_TOLERANCE,
-                 tops=None):
+                 tops=None, ledge: float = FEET_ABOVE_GROUND):
     """(P,) the largest, over the standing groups, of the drop (m) from a group's posed sole
     to what it would stand on: the highest scene sample at most ``tolerance`` above the sole
     in the 2 cm columns under the group's contact points and their neighbours
@@ -408,7 +438,8 @@ def feet_gaps_at(feet: list, scene, ground: np.ndarray, tolerance: float = FEET_
     (P,) posed sole heights). Negative when the sole is below the surface it meets; inf
     when a group with nothing under it is more than :data:`FEET_BELOW_GROUND` below the
     ground (it hangs past the edge of the scan's floor) or stands on a surface more than
-    :data:`FEET_ABOVE_GROUND` above it (a ledge no one climbs to). ``tops``, if given, maps
+    ``ledge`` (:data:`FEET_ABOVE_GROUND`) above it (a ledge no one climbs to). ``tops``, if
+    given, maps
     (group index, limit (P,)) to what ``highest_under`` finds there (the Numba kernel's
     answer, without the posed points, which may then be None)."""
     worst = np.full(len(ground), -np.inf)
@@ -418,9 +449,15 @@ def feet_gaps_at(feet: list, scene, ground: np.ndarray, tolerance: float = FEET_
         none = ~np.isfinite(top)
         gap = soles - np.where(none, ground, top)
         gap[none & (soles < ground - FEET_BELOW_GROUND)] = np.inf
-        gap[~none & (top > ground + FEET_ABOVE_GROUND)] = np.inf
+        gap[~none & (top > ground + ledge)] = np.inf
         worst = np.maximum(worst, gap)
     return worst
+
+
+def ledge_height(tensor) -> float:
+    """How high above the ground a surface the feet stand on may be (:func:`feet_gaps_at`):
+    :data:`FEET_ABOVE_GROUND` for a seated person, any height for a rider's foot rest."""
+    return np.inf if tensor.mount_height is not None else FEET_ABOVE_GROUND
 
 
 def feet_pass(gaps, seat_heights, reach: float, seat_reach: float = SEAT_REACH) -> np.ndarray:
@@ -453,13 +490,14 @@ def feet_gaps(points, orient, tensor, scene, n_orientations: int, grid=None) -> 
     table = columns.table() if columns is not None else None
     if table is None:
         feet = [(points[:, None, :] + off[orient], sole) for off, sole in zip(offsets, soles)]
-        return feet_gaps_at(feet, scene, ground)
+        return feet_gaps_at(feet, scene, ground, ledge=ledge_height(tensor))
     from interaction_tensor.placement import _kernels as _numba_clearance
 
     def tops(g, limit):
         return _numba_clearance.highest(points, orient, offsets[g][:, :, :2], limit, table,
                                         columns.cell)
-    return feet_gaps_at([(None, sole) for sole in soles], scene, ground, tops=tops)
+    return feet_gaps_at([(None, sole) for sole in soles], scene, ground, tops=tops,
+                        ledge=ledge_height(tensor))
 
 
 def feet_gaps_poses(poses, tensor, scene) -> np.ndarray:
@@ -475,7 +513,7 @@ def feet_gaps_poses(poses, tensor, scene) -> np.ndarray:
     for g, sole in groups:
         posed = np.einsum("pij,fj->pfi", poses[:, :3, :3], g) + poses[:, None, :3, 3]
         feet.append((posed, posed[:, :, 2].min(axis=1)))      # the sole: its lowest point
-    return feet_gaps_at(feet, scene, ground)
+    return feet_gaps_at(feet, scene, ground, ledge=ledge_height(tensor))
 
 
 def _ball_members(scene, centres, reach):
@@ -680,7 +718,8 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
     object no deeper than that below the scene's ground), mount (when it has
     ``mount_height``: the reference point no higher than that above the ground,
     :func:`above_ground`), feet (when it has ``feet_reach``: its standing contacts find
-    something to stand on, or dangle from a seat within reach, :func:`feet_pass`),
+    something to stand on, or dangle from a seat within reach, :func:`feet_pass`; a
+    rider's feet find a floor or a rest at any height within reach, no dangling),
     straddle (when it has ``straddle``: :func:`straddle_passes`), clearance (every
     descriptor with clearance points), through (when the descriptor asks for its
     through-section to be crossed: :func:`through_crossed`), interior and contact.
@@ -713,8 +752,10 @@ def check_placements(points, orient, tensor, settings, scene, grid=None):
         return above_ground(at, tensor, scene) <= tensor.mount_height
 
     def feet(at, o):
-        return feet_pass(feet_gaps(at, o, tensor, scene, n_o, grid),
-                         above_ground(at, tensor, scene), tensor.feet_reach)
+        gaps = feet_gaps(at, o, tensor, scene, n_o, grid)
+        if tensor.mount_height is not None:           # a rider's feet reach a floor or a rest
+            return gaps <= tensor.feet_reach
+        return feet_pass(gaps, above_ground(at, tensor, scene), tensor.feet_reach)
 
     def straddle(at, o):
         return straddle_passes(at, o, tensor, scene, n_o, grid)
