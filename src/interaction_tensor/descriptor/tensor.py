@@ -259,8 +259,9 @@ class InteractionTensor:
         (the reference point) within :data:`~interaction_tensor.placement.checks.SEAT_REACH`
         of the ground (a person on a desk's edge passes, one on a wardrobe's top does not;
         :func:`~interaction_tensor.placement.checks.feet_pass`). With ``mount_height`` (a
-        rider) they are the query's feet (:func:`~interaction_tensor.placement.checks.rider_feet`),
-        a surface at any height is a rest, and the feet never dangle; None: no such test
+        rider) they are the query's feet
+        (:func:`~interaction_tensor.placement.checks.rider_feet`), a surface at any height
+        is a rest, and the feet never dangle; None: no such test
     straddle : detection's straddle test (riding), or None: ``{"astride": box or None,
         "legroom": [box, ...]}``, boxes ``((x0, x1), (y0, y1), (z0, z1))`` (m, training frame,
         relative to the reference point, turning with the placement): the scene must have
