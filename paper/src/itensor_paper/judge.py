@@ -341,10 +341,7 @@ class Judge:
         self.bodies = self._bodies(query)
         vessel = taps.Vessel.of(self.samples)        # a container's opening and side
         self.opening, self.side = vessel.opening, vessel.side
-        z0 = self.samples[:, 2].min()
-        low = self.samples[self.samples[:, 2] <= z0 + st.feet_height]
-        mid = np.median(self.samples[:, 1])
-        self.feet = [low[low[:, 1] > mid], low[low[:, 1] <= mid]]
+        self.feet = checks.split_feet(self.samples, st.feet_height)
         self.loop_body = None
         if "loop" in self.tests:
             if loop is None:

@@ -408,18 +408,22 @@ def standing_groups(tensor, tolerance: float = 0.02) -> list:
             if pts[ids == g, 2].max() <= tensor.ground + tolerance]
 
 
+def split_feet(points, height: float = FEET_HEIGHT) -> list:
+    """A person's two feet among its surface points (N, 3), training frame: the points
+    within ``height`` (m) of the lowest, on either side of the median across (y). The
+    judge's feet, and detection's for a rider (:func:`rider_feet`)."""
+    points = np.asarray(points, float).reshape(-1, 3)
+    low = points[points[:, 2] <= points[:, 2].min(initial=np.inf) + height]
+    mid = np.median(points[:, 1]) if len(points) else 0.0
+    return [low[low[:, 1] > mid], low[low[:, 1] <= mid]]
+
+
 def rider_feet(tensor, cell: float = 0.02) -> list:
-    """A rider's two feet: the query's vertices within :data:`FEET_HEIGHT` of its lowest,
-    on either side of their median across (training-frame y), each thinned to one vertex a
-    ``cell`` (m) square (the feet test searches a 2 cm column and its neighbours under
-    each), with the foot's lowest height as its sole. The judge's feet."""
-    v = np.asarray(tensor.query_vertices, float).reshape(-1, 3)
-    if len(v) == 0:
-        return []
-    low = v[v[:, 2] <= v[:, 2].min() + FEET_HEIGHT]
-    mid = np.median(v[:, 1])
+    """A rider's two feet (:func:`split_feet` of the query's vertices), each thinned to one
+    vertex a ``cell`` (m) square (the feet test searches a 2 cm column and its neighbours
+    under each), with the foot's lowest height as its sole."""
     feet = []
-    for foot in (low[low[:, 1] > mid], low[low[:, 1] <= mid]):
+    for foot in split_feet(tensor.query_vertices):
         if len(foot):
             _, keep = np.unique(np.floor(foot[:, :2] / cell).astype(np.int64), axis=0,
                                 return_index=True)
@@ -439,9 +443,8 @@ def feet_gaps_at(feet: list, scene, ground: np.ndarray, tolerance: float = FEET_
     when a group with nothing under it is more than :data:`FEET_BELOW_GROUND` below the
     ground (it hangs past the edge of the scan's floor) or stands on a surface more than
     ``ledge`` (:data:`FEET_ABOVE_GROUND`) above it (a ledge no one climbs to). ``tops``, if
-    given, maps
-    (group index, limit (P,)) to what ``highest_under`` finds there (the Numba kernel's
-    answer, without the posed points, which may then be None)."""
+    given, maps (group index, limit (P,)) to what ``highest_under`` finds there (the Numba
+    kernel's answer, without the posed points, which may then be None)."""
     worst = np.full(len(ground), -np.inf)
     for g, (posed, soles) in enumerate(feet):
         top = (scene.highest_under(posed[:, :, :2], soles + tolerance) if tops is None
