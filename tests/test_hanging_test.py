@@ -201,8 +201,9 @@ def test_the_fit_kernel_decides_as_its_reference(hanging, room):
                                   degrees=True).as_matrix()
         t = t - rot @ op.centre
         args = (op, rot, t, room.points, room.tree, room.spacing)
-        fast = hooks.fits(*args, sections=cut)
-        assert fast == hooks.fits(*args, sections=cut, reference=True), i
+        fast = hooks.fits(*args, sections=cut, normals=room.normals)
+        assert fast == hooks.fits(*args, sections=cut, normals=room.normals,
+                                  reference=True), i
         got.append(fast)
     assert any(got) and not all(got)
 
@@ -252,6 +253,36 @@ def test_on_a_mesh_a_thick_top_under_the_hook_does_not_fit_however_it_was_sample
     # nothing crossing the plane near the hook: nothing to fit
     far = _sections([box_part("far", (3.0, 0.0, top - 0.5), (0.1, 2.0, 1.0))])
     assert hooks.fits(op, rot, t, scene.points + 3.0, None, 0.01, sections=far)
+
+
+def test_on_a_mesh_what_runs_along_the_hook_beside_its_plane_does_not_fit(hanging,
+                                                                         monkeypatch):
+    """Beside the rail, a pipe rising from inside the hook a few millimetres off its plane
+    (a faucet's elbow) and a plate lying along the plane (a lamp shade's flat end) go on
+    through the wire: the cuts beside the plane find the pipe and the slab's samples facing
+    along the axis the plate, which the plane's own cut misses."""
+    ex, tensor = hanging
+    op = tensor.hook_opening()
+    rot, t = np.eye(3), np.zeros(3)
+    c = op.centre
+    pipe = box_part("pipe", (c[0], c[1] + 0.005, c[2] + 0.1), (0.006, 0.006, 0.2))
+    plate = box_part("plate", (c[0], c[1] + 0.003, c[2] + 0.1), (0.1, 0.002, 0.2))
+    for part in (pipe, plate):
+        scene = _with(ex, [part])
+        args = (op, rot, t, scene.points, scene.tree, scene.spacing)
+        cut = scene.sections()
+        assert not hooks.fits(*args, sections=cut, normals=scene.normals)
+        assert not hooks.fits(*args, sections=cut, normals=scene.normals, reference=True)
+        with monkeypatch.context() as m:
+            m.setattr(hooks, "SECTION_OFFSETS", (0.0,))
+            assert hooks.fits(*args, sections=cut)
+    # the plate's faces lie between the cuts: only its samples find it
+    scene = _with(ex, [plate])
+    assert hooks.fits(op, rot, t, scene.points, scene.tree, scene.spacing,
+                      sections=scene.sections())
+    rail = it.prepare_scene(ex.scene_object, 0.01, seed=0)
+    assert hooks.fits(op, rot, t, rail.points, rail.tree, rail.spacing,
+                      sections=rail.sections(), normals=rail.normals)
 
 
 def test_a_fold_round_its_bar_is_tight_and_a_bar_under_the_cloth_does_not_fit():

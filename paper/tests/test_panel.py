@@ -7,6 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from interaction_tensor.cli.main import main
+from interaction_tensor.errors import InputError
 from itensor_paper import panel
 
 from paper_support import shared_file
@@ -59,8 +61,36 @@ def test_answers_make_the_labelled_data_and_the_agreement(tmp_path):
     rows = {r["affordance"]: r for r in panel.agreement(back, judged, held_out_only=False)}
     assert rows["all"]["poses"] == 20 and rows["all"]["agree"] == 10
     (tmp_path / "bad.csv").write_text("Q0001,maybe\n")
-    with pytest.raises(ValueError, match="not yes or no"):
+    with pytest.raises(InputError, match="not yes or no"):
         panel.answers_from(tmp_path / "bad.csv")
+
+
+def test_a_new_round_joins_the_labelled_data(tmp_path):
+    """``panel-verdicts`` adds a round's poses and answers to the labelled data: a pose it
+    already holds gets the new answers beside its own, a new one is added under its id, an
+    id given to another pose is refused in one line."""
+    rated = panel.shuffled_ids(panel.select(_rows(), per_affordance=10, seed=3), 5)
+    for p in rated:
+        p.answers = ["yes", "no", "yes"]
+    panel.save(rated, tmp_path / "panel.csv")
+    again = panel.PanelPose("C0001", rated[0].affordance, rated[0].example, rated[0].scene,
+                            "iT-weighted", "top", 1, rated[0].pose + 1e-6)
+    fresh = panel.PanelPose("C0002", "hanging", "hanging-hanger", "kitchen1", "iT-weighted",
+                            "top", 2, np.eye(4))
+    panel.save([again, fresh], tmp_path / "key.csv")
+    (tmp_path / "r1.csv").write_text("id,answer\nC0001,no\nC0002,yes\n")
+    (tmp_path / "r2.csv").write_text("id,answer\nC0001,no\nC0002,yes\n")
+    assert main(["paper", "panel-verdicts", str(tmp_path / "key.csv"), str(tmp_path / "r1.csv"),
+                 str(tmp_path / "r2.csv"), "-o", str(tmp_path / "panel.csv"), "-q"]) == 0
+    back = {p.id: p for p in panel.load(tmp_path / "panel.csv")}
+    assert len(back) == len(rated) + 1
+    assert back[rated[0].id].answers == ["yes", "no", "yes", "no", "no"]
+    assert back[rated[0].id].majority is False
+    assert back["C0002"].answers == ["yes", "yes"] and back["C0002"].scene == "kitchen1"
+    clash = panel.PanelPose(rated[1].id, "hanging", "hanging-hanger", "kitchen1",
+                            "iT-weighted", "top", 3, 2 * np.eye(4))
+    with pytest.raises(InputError, match=f"pose id {rated[1].id} is already"):
+        panel.add_round(panel.load(tmp_path / "panel.csv"), [clash])
 
 
 def test_sheets_show_ids_and_no_verdict(tmp_path):

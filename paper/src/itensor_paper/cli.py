@@ -143,7 +143,10 @@ def cmd_panel_sheets(args) -> int:
 
 def cmd_panel_verdicts(args) -> int:
     poses = panel.merge_answers(panel.load(args.key), *args.answers)
-    panel.save(poses, args.output)
+    out = Path(args.output)
+    if out.exists() and out.resolve() != Path(args.key).resolve():
+        poses = panel.add_round(panel.load(out), poses)      # a new round beside the rest
+    panel.save(poses, out)
     if not args.quiet:
         decided = sum(p.majority is not None for p in poses)
         print(f"wrote {args.output}: {len(poses)} poses, {decided} with a majority")
@@ -348,6 +351,7 @@ def register(sub) -> None:
     p.add_argument("key", help="the panel's key.csv (or the labelled data to add answers to)")
     p.add_argument("answers", nargs="+", help="one CSV of id,answer per rater")
     p.add_argument("-o", "--output", default=str(panel.DATA_FILE),
-                   help="where to write the poses and verdicts")
+                   help="the labelled data to write the poses and verdicts into (a new "
+                        "round's poses are added to what it holds)")
     quiet_option(p)
     p.set_defaults(func=cmd_panel_verdicts)

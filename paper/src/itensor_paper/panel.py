@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from interaction_tensor import affordances
+from interaction_tensor.errors import InputError
 from interaction_tensor.geometry.files import atomic_path, write_json
 from interaction_tensor.geometry.load import load_geometry
 from interaction_tensor.outputs.render import _font
@@ -363,7 +364,7 @@ def answers_from(path) -> dict:
                 continue
             pid, ans = row[0].strip(), row[1].strip().lower()
             if ans not in ("yes", "no"):
-                raise ValueError(f"{path}: answer for {pid} is {ans!r}, not yes or no")
+                raise InputError(path, f"answer for {pid} is {ans!r}, not yes or no")
             out[pid] = ans
     return out
 
@@ -376,6 +377,28 @@ def merge_answers(poses, *answer_files) -> list:
             if pid in by_id:
                 by_id[pid].answers.append(ans)
     return poses
+
+
+def add_round(rated, new, tolerance: float = 1e-4) -> list:
+    """The labelled data ``rated`` with a new round's poses ``new`` (their answers merged)
+    added: a pose ``rated`` already shows (the same scene and example, every entry of the
+    4x4 within ``tolerance``) takes the new answers beside its own, the others are added
+    under their round's ids; an id that ``rated`` gives another pose is refused."""
+    out = list(rated)
+    ids = {p.id: p for p in out}
+    for p in new:
+        same = next((q for q in out if q.scene == p.scene and q.example == p.example
+                     and np.abs(np.asarray(q.pose) - np.asarray(p.pose)).max() <= tolerance),
+                    None)
+        if same is not None:
+            same.answers.extend(p.answers)
+        elif p.id in ids:
+            raise InputError(None, f"pose id {p.id} is already another pose's in the "
+                                   "labelled data")
+        else:
+            out.append(p)
+            ids[p.id] = p
+    return out
 
 
 def rater_agreement(poses) -> float | None:

@@ -134,7 +134,7 @@ class CollisionCheck:
         scene, tensor = self.det.scene, self.det.tensor
         rot, t = pose[:3, :3], pose[:3, 3]
         if not hooks.fits(tensor.hook_opening(), rot, t, scene.points, scene.tree,
-                          scene.spacing, sections=scene.sections()):
+                          scene.spacing, sections=scene.sections(), normals=scene.normals):
             return False
         if self._flats is None:
             self._flats = hooks.flat_tree(scene.points, scene.normals)

@@ -495,43 +495,45 @@ def highest(points, orient, offsets, limit, table, cell: float) -> np.ndarray:
 
 # ----------------------------------------------------------------------- hanging's fit
 @njit(cache=True)
-def section_fit(tri, c, normal, reach, step, rot, side, up, inside, limit, margin, link,
-                least, bins):
-    """:func:`.hooks.fits` on a mesh's cut, the same arithmetic: the plane through ``c``
-    normal to ``normal`` cuts triangles ``tri`` (M, 3, 3) (the two edges each crosses, in
-    edge order), a point every ``step`` or closer along each cut within ``reach`` of ``c``,
-    in the opening's frame (``rot``'s columns; ``side`` and ``up`` span its plane); pieces
-    are the points linked within ``link``; True unless some piece reaching within
-    ``inside`` of the axis has ``least`` points past ``limit`` (per direction bin, of
-    ``bins``) plus ``margin``."""
+def section_fit(tri, c, normal, offsets, extra, reach, step, rot, side, up, inside, limit,
+                margin, link, least, bins):
+    """:func:`.hooks.fits` on a mesh's cuts, the same arithmetic: the planes normal to
+    ``normal`` at ``offsets`` (m) from ``c`` cut triangles ``tri`` (M, 3, 3) (the two edges
+    each crosses, in edge order), a point every ``step`` or closer along each cut, and the
+    scene points ``extra`` (E, 3) beside them, those within ``reach`` of ``c`` taken to the
+    opening's frame (``rot``'s columns; ``side`` and ``up`` span its plane); pieces are the
+    points linked within ``link``; True unless some piece reaching within ``inside`` of the
+    axis has ``least`` points past ``limit`` (per direction bin, of ``bins``) plus
+    ``margin``."""
     m = tri.shape[0]
-    # the cut's segments
-    seg = np.empty((m, 2, 3))
+    # the cuts' segments
+    seg = np.empty((m * len(offsets), 2, 3))
     sv = np.empty(3)
     k = 0
-    for f in range(m):
-        smin = math.inf
-        smax = -math.inf
-        for v in range(3):
-            s0 = ((tri[f, v, 0] - c[0]) * normal[0] + (tri[f, v, 1] - c[1]) * normal[1]
-                  + (tri[f, v, 2] - c[2]) * normal[2])
-            sv[v] = s0
-            smin = min(smin, s0)
-            smax = max(smax, s0)
-        if not (smin < 0.0 and smax > 0.0):
-            continue
-        e = 0
-        for v in range(3):
-            w = (v + 1) % 3
-            sa, sb = sv[v], sv[w]
-            if (sa < 0.0 and sb >= 0.0) or (sa >= 0.0 and sb < 0.0):
-                t = sa / (sa - sb)
-                for j in range(3):
-                    seg[k, e, j] = tri[f, v, j] + t * (tri[f, w, j] - tri[f, v, j])
-                e += 1
-                if e == 2:
-                    break
-        k += 1
+    for o in offsets:
+        for f in range(m):
+            smin = math.inf
+            smax = -math.inf
+            for v in range(3):
+                s0 = ((tri[f, v, 0] - c[0]) * normal[0] + (tri[f, v, 1] - c[1]) * normal[1]
+                      + (tri[f, v, 2] - c[2]) * normal[2]) - o
+                sv[v] = s0
+                smin = min(smin, s0)
+                smax = max(smax, s0)
+            if not (smin < 0.0 and smax > 0.0):
+                continue
+            e = 0
+            for v in range(3):
+                w = (v + 1) % 3
+                sa, sb = sv[v], sv[w]
+                if (sa < 0.0 and sb >= 0.0) or (sa >= 0.0 and sb < 0.0):
+                    t = sa / (sa - sb)
+                    for j in range(3):
+                        seg[k, e, j] = tri[f, v, j] + t * (tri[f, w, j] - tri[f, v, j])
+                    e += 1
+                    if e == 2:
+                        break
+            k += 1
     # the points along them, within reach, in the opening's frame
     total = 0
     counts = np.empty(k, np.int64)
@@ -541,7 +543,7 @@ def section_fit(tri, c, normal, reach, step, rot, side, up, inside, limit, margi
         dz = seg[g, 1, 2] - seg[g, 0, 2]
         counts[g] = int(math.ceil(math.sqrt(dx * dx + dy * dy + dz * dz) / step)) + 1
         total += counts[g]
-    d = np.empty((total, 3))
+    d = np.empty((total + extra.shape[0], 3))
     n = 0
     for g in range(k):
         cnt = counts[g]
@@ -556,6 +558,15 @@ def section_fit(tri, c, normal, reach, step, rot, side, up, inside, limit, margi
             for j in range(3):
                 d[n, j] = px * rot[0, j] + py * rot[1, j] + pz * rot[2, j]
             n += 1
+    for g in range(extra.shape[0]):
+        px = extra[g, 0] - c[0]
+        py = extra[g, 1] - c[1]
+        pz = extra[g, 2] - c[2]
+        if math.sqrt(px * px + py * py + pz * pz) > reach:
+            continue
+        for j in range(3):
+            d[n, j] = px * rot[0, j] + py * rot[1, j] + pz * rot[2, j]
+        n += 1
     d = d[:n]
     ins = np.zeros(n, np.bool_)
     past = np.zeros(n, np.bool_)

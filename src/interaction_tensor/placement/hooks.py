@@ -37,9 +37,16 @@ FIT_MIN_SAMPLES = 2
 #: Scene samples (or points of a mesh's cut) closer than this (in scene spacings) belong to
 #: the same piece.
 FIT_LINK = 2.5
-#: On a mesh scene, the step (in scene spacings) of the points along the plane's exact cut
-#: of the mesh that :func:`fits` follows.
+#: On a mesh scene, the step (in scene spacings) of the points along the planes' exact cuts
+#: of the mesh that :func:`fits` follows...
 SECTION_STEP = 0.2
+#: ... the planes' offsets (in scene spacings) from the opening's, across the slab the
+#: scene's samples are taken from...
+SECTION_OFFSETS = (-0.5, 0.0, 0.5)
+#: ... and the angle (degrees) within which a face's normal lies along the opening's axis
+#: for its samples in that slab to be taken as well: the cuts run along such a face (a
+#: shade's end, a bracket's plate) or miss it.
+FACING_ANGLE = 30.0
 #: The object's bottom: its samples within this (m) of its lowest point.
 FREE_BAND = 0.03
 #: A bottom sample rests on a surface when one lies within this (m) of it.
@@ -149,7 +156,7 @@ def opening_of(samples: np.ndarray, section: np.ndarray) -> Opening | None:
 def fits(opening: Opening, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
          tree: cKDTree, spacing: float, margin: float = FIT_MARGIN,
          min_samples: int = FIT_MIN_SAMPLES, reach: float = FIT_REACH,
-         sections=None, reference: bool = False) -> bool:
+         sections=None, normals: np.ndarray | None = None, reference: bool = False) -> bool:
     """Whether what passes through the opening, posed by ``rot`` (3, 3) and ``t`` (3,),
     fits inside it. The scene's samples (``points`` and their ``tree``, at ``spacing``)
     within a spacing of the posed plane and ``reach`` of its centre are split into connected
@@ -160,38 +167,53 @@ def fits(opening: Opening, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
     a bag's strap, which cannot be put round it. True when nothing passes through.
 
     With ``sections`` (the scene mesh's :class:`~interaction_tensor.geometry.sections.
-    MeshSections`), the scene crossing the plane is the mesh's exact cut by it instead of
-    the samples near it, a point every :data:`SECTION_STEP` of a spacing along it, and a
-    piece fails with a spacing's length of cut past the limit: random samples leave gaps of
-    several centimetres in a thin slab, and a wall's top under a towel's fold then looks
-    like a rod. Its points link into pieces as samples do (within :data:`FIT_LINK`
-    spacings), across the gaps a modelled scene leaves between a board's front and its
-    lip, or a cabinet's panels: linked only along the cut, the lip a hook lies along came
-    apart from the board past the hook. The cut and its pieces are one Numba kernel
-    (:func:`~interaction_tensor.placement._kernels.section_fit`); ``reference``: NumPy and
-    SciPy, the path it is tested against."""
+    MeshSections`), the scene in that slab is the mesh's exact cuts by the planes at
+    :data:`SECTION_OFFSETS` across it instead, a point every :data:`SECTION_STEP` of a
+    spacing along each, and a piece fails with a spacing's length of cut past the limit:
+    random samples leave gaps of several centimetres in a thin slab, and a wall's top under
+    a towel's fold then looks like a rod. The cuts off the plane find a pipe running along
+    the hook a few millimetres beside it, and with the samples' ``normals`` the slab's
+    samples on faces that lie along the plane (:data:`FACING_ANGLE`) are added, which no
+    cut meets: the flat end of a lamp's shade. Its points link into pieces as samples do
+    (within :data:`FIT_LINK` spacings), across the gaps a modelled scene leaves between a
+    board's front and its lip, or a cabinet's panels: linked only along the cut, the lip a
+    hook lies along came apart from the board past the hook. The cuts and their pieces are
+    one Numba kernel (:func:`~interaction_tensor.placement._kernels.section_fit`);
+    ``reference``: NumPy and SciPy, the path it is tested against."""
     c = rot @ opening.centre + t
     if sections is not None:
         step = SECTION_STEP * spacing
         link, least = FIT_LINK * spacing, max(min_samples, int(round(1.0 / SECTION_STEP)))
+        normal = rot @ opening.axis
+        normal = normal / np.linalg.norm(normal)
+        extra = np.zeros((0, 3))
+        if normals is not None and len(points):
+            near = np.asarray(tree.query_ball_point(c, reach), np.int64)
+            h = (points[near] - c) @ normal
+            along = np.abs(normals[near] @ normal) >= np.cos(np.radians(FACING_ANGLE))
+            extra = points[near[(np.abs(h) <= spacing) & along]]
+        offsets = np.asarray(SECTION_OFFSETS, np.float64) * spacing
         if not reference:
             from interaction_tensor.placement import _kernels
 
-            normal = rot @ opening.axis
-            normal = normal / np.linalg.norm(normal)
             tri = sections.triangles_near(c, reach)
             return bool(_kernels.section_fit(
-                np.ascontiguousarray(tri), c, normal, float(reach), float(step),
+                np.ascontiguousarray(tri), c, normal, offsets,
+                np.ascontiguousarray(extra, np.float64), float(reach), float(step),
                 np.ascontiguousarray(rot, np.float64), np.asarray(opening.side, np.float64),
                 np.asarray(opening.up, np.float64), float(opening.inside),
                 np.asarray(opening.limit, np.float64), float(margin), float(link),
                 int(least), BINS))
-        d = (sections.points(c, rot @ opening.axis, reach, step) - c) @ rot
+        pts = np.vstack([sections.points(c + o * normal, normal, reach, step)
+                         for o in offsets] + [extra])
+        d = (pts[np.linalg.norm(pts - c, axis=1) <= reach] - c) @ rot
     else:
         near = np.asarray(tree.query_ball_point(c, reach), np.int64)
         d = (points[near] - c) @ rot                      # the opening's (training) frame
         d = d[np.abs(d @ opening.axis) <= spacing]
         link, least = FIT_LINK * spacing, min_samples
+    if not len(d):
+        return True
     x, z = d @ opening.side, d @ opening.up
     r = np.hypot(x, z)
     inside = r <= opening.inside
