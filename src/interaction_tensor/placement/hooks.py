@@ -186,26 +186,26 @@ def fits(opening: Opening, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
         link, least = FIT_LINK * spacing, max(min_samples, int(round(1.0 / SECTION_STEP)))
         normal = rot @ opening.axis
         normal = normal / np.linalg.norm(normal)
-        extra = np.zeros((0, 3))
-        if normals is not None and len(points):
-            near = np.asarray(tree.query_ball_point(c, reach), np.int64)
-            h = (points[near] - c) @ normal
-            along = np.abs(normals[near] @ normal) >= np.cos(np.radians(FACING_ANGLE))
-            extra = points[near[(np.abs(h) <= spacing) & along]]
         offsets = np.asarray(SECTION_OFFSETS, np.float64) * spacing
         if not reference:
             from interaction_tensor.placement import _kernels
 
-            tri = sections.triangles_near(c, reach)
-            return bool(_kernels.section_fit(
-                np.ascontiguousarray(tri), c, normal, offsets,
-                np.ascontiguousarray(extra, np.float64), float(reach), float(step),
-                np.ascontiguousarray(rot, np.float64), np.asarray(opening.side, np.float64),
-                np.asarray(opening.up, np.float64), float(opening.inside),
-                np.asarray(opening.limit, np.float64), float(margin), float(link),
-                int(least), BINS))
+            tri = np.ascontiguousarray(sections.triangles_near(c, reach))
+
+            def cut(offs, more):
+                return bool(_kernels.section_fit(
+                    tri, c, normal, offs, np.ascontiguousarray(more, np.float64),
+                    float(reach), float(step), np.ascontiguousarray(rot, np.float64),
+                    np.asarray(opening.side, np.float64), np.asarray(opening.up, np.float64),
+                    float(opening.inside), np.asarray(opening.limit, np.float64),
+                    float(margin), float(link), int(least), BINS))
+            # the plane's own cut first: what fails on some of the points fails on all
+            # (pieces only join and points past the limit only add), and most poses do
+            return (cut(np.zeros(1), np.zeros((0, 3)))
+                    and cut(offsets, _facing(points, normals, tree, c, normal, spacing, reach)))
         pts = np.vstack([sections.points(c + o * normal, normal, reach, step)
-                         for o in offsets] + [extra])
+                         for o in offsets]
+                        + [_facing(points, normals, tree, c, normal, spacing, reach)])
         d = (pts[np.linalg.norm(pts - c, axis=1) <= reach] - c) @ rot
     else:
         near = np.asarray(tree.query_ball_point(c, reach), np.int64)
@@ -228,6 +228,18 @@ def fits(opening: Opening, rot: np.ndarray, t: np.ndarray, points: np.ndarray,
     _, label = connected_components(graph, directed=False)
     through = np.isin(label, np.unique(label[inside]))
     return int((past & through).sum()) < least
+
+
+def _facing(points, normals, tree, c, normal, spacing: float, reach: float) -> np.ndarray:
+    """The scene samples within ``spacing`` of the plane through ``c`` normal to ``normal``
+    and ``reach`` of ``c`` whose ``normals`` lie within :data:`FACING_ANGLE` of the plane's
+    (none without normals)."""
+    if normals is None or not len(points):
+        return np.zeros((0, 3))
+    near = np.asarray(tree.query_ball_point(c, reach), np.int64)
+    h = (points[near] - c) @ normal
+    along = np.abs(normals[near] @ normal) >= np.cos(np.radians(FACING_ANGLE))
+    return points[near[(np.abs(h) <= spacing) & along]]
 
 
 def bottom(samples: np.ndarray, band: float = FREE_BAND) -> np.ndarray:
